@@ -1,0 +1,68 @@
+"""The `jtire` command line: `jtire run | sweep | calibrate | sample | compete | data | figures`.
+
+Each subcommand lives in the module that owns its work; this file only wires them together, and
+turns every expected failure (a bad config, an unstable simulation) into one line on stderr and a
+non-zero exit. Library modules never print; this is the only place that writes to the terminal.
+"""
+
+import argparse
+import importlib
+import importlib.util
+import sys
+
+# subcommand -> (module, one-line help). Each module defines `add_arguments(parser)` and
+# `run_cli(args) -> int`. Imports are lazy so `jtire --help` is instant.
+SUBCOMMANDS = {
+    "run": ("jtire.run_cli", "run one virtual experiment from a TOML config"),
+    "sweep": ("jtire.sweep_cli", "run an experiment over the load x pressure grid (vmapped)"),
+    "compete": ("calibration.competition", "ARSM vs GA vs Monte Carlo on the soil-block simulation"),
+    "data": ("jtire.data", "measured test-track and sandbox rolling-resistance tables and fits"),
+}
+
+
+class UserError(Exception):
+    """An error caused by the user's input; reported as one line, no traceback."""
+
+
+def _available():
+    out = {}
+    for name, (mod, helptext) in SUBCOMMANDS.items():
+        try:
+            spec = importlib.util.find_spec(mod)
+        except ModuleNotFoundError:
+            spec = None
+        if spec is not None:
+            out[name] = (mod, helptext)
+    return out
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(prog="jtire", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name, (mod, helptext) in _available().items():
+        p = sub.add_parser(name, help=helptext, description=helptext)
+        module = importlib.import_module(mod)
+        module.add_arguments(p)
+        p.set_defaults(_module=module)
+    return parser
+
+
+def main(argv=None):
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    from jtire.errors import JtireError
+
+    try:
+        return int(args._module.run_cli(args) or 0)
+    except JtireError as e:
+        print(f"jtire {args.command}: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"jtire {args.command}: interrupted (progress saved where the command supports it)",
+              file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,17 @@
+"""Exceptions that the CLI reports as one line (no traceback)."""
+
+
+class JtireError(Exception):
+    """Base class of every error that is the user's to fix or that a run reports in-band."""
+
+
+class ConfigError(JtireError, ValueError):
+    """A config field is missing, unknown, of the wrong type, or out of its allowed range.
+
+    The message names the field and the allowed range, e.g.
+    ``condition.pressure_psi = -3: must be in [10, 250] psi``.
+    """
+
+
+class SimulationError(JtireError, RuntimeError):
+    """A simulation went unstable or failed to settle; the message says where and when."""
