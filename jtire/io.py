@@ -1,0 +1,89 @@
+"""Result files written atomically (temp file in the same folder, then os.replace).
+
+A reader (or a run killed half way) never sees a half-written file. Append-only histories
+(JSON lines) are flushed and fsynced per record, and readers ignore a torn last line.
+"""
+
+import csv
+import io
+import json
+import os
+import tempfile
+from pathlib import Path
+
+
+def atomic_write_bytes(path, data: bytes) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def atomic_write_text(path, text: str) -> Path:
+    return atomic_write_bytes(path, text.encode())
+
+
+def _jsonable(x):
+    import numpy as np
+
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if hasattr(x, "tolist"):  # numpy / jax arrays and scalars
+        return _jsonable(np.asarray(x).tolist())
+    if isinstance(x, float) and not (x == x and abs(x) != float("inf")):
+        return None  # JSON has no NaN/inf; None marks "not available"
+    return x
+
+
+def atomic_write_json(path, obj) -> Path:
+    return atomic_write_text(path, json.dumps(_jsonable(obj), indent=2) + "\n")
+
+
+def atomic_write_csv(path, header, rows) -> Path:
+    """rows: iterable of sequences, or a dict of equal-length columns (then header may be None)."""
+    if isinstance(rows, dict):
+        header = list(rows.keys()) if header is None else header
+        cols = [list(map(_jsonable, rows[h])) for h in header]
+        rows = list(zip(*cols))
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    for r in rows:
+        w.writerow(_jsonable(list(r)))
+    return atomic_write_text(path, buf.getvalue())
+
+
+def append_jsonl(path, record: dict) -> None:
+    """Append one record and fsync, so a completed record survives a kill at any moment."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as f:
+        f.write(json.dumps(_jsonable(record)) + "\n")
+        f.flush()
+        os.fsync(f.fileno())
+
+
+def read_jsonl(path) -> list:
+    """Read complete records; a torn last line (killed mid-write) is dropped."""
+    path = Path(path)
+    if not path.exists():
+        return []
+    out = []
+    for line in path.read_text().splitlines():
+        try:
+            out.append(json.loads(line))
+        except json.JSONDecodeError:
+            break
+    return out
