@@ -1,0 +1,373 @@
+"""Measured rolling resistance (study chapter 3): test-track and sandbox tables, averages, fits.
+
+The tables live in configs/data/ (comment lines start with '#'; forces in lbf, pressures in psi).
+They are converted to SI once, here, when loaded (1 lbf = 4.4482216152605 N,
+1 psi = 6894.757293168361 Pa); everything downstream is N and Pa.
+
+How the study averaged (checked against its printed track bobtail row, Fx 24.03552 lbf,
+Fz 1160.946 lbf, RRC 0.018806): Fx and Fz are arithmetic means over the runs, and the RRC is the
+arithmetic mean of the *tabulated per-run RRC column*. Neither ratio recomputed from the
+tabulated forces reproduces it (mean(Fx)/mean(Fz) = 0.020703, mean(Fx/Fz) = 0.020834): on the
+track each run's Fx and Fz are means of the left and right wheel transducers and its RRC was
+formed before that averaging, so the column cannot be rebuilt from the forces (the bobtail runs
+differ by ~9 %, the loaded runs by 0-4 %). On the sandbox the column equals Fx/Fz to 1e-9.
+Both are therefore kept: `RunTable.rrc_table` (the study's RRC1) and `RunTable.rrc_ratio`
+(Fx/Fz); the fits use the study's column unless asked otherwise (`rrc_source="ratio"`).
+
+Data quirks kept as printed (reported, not repaired): the track trailer1 mean Fz is 2829.09 lbf
+while its nominal load label reads 2819.09 (10.00 lbf apart, a one-digit slip in the study); in
+the sandbox trailer1 runs 1 and 2 are identical on both axles (a duplicated table row).
+
+`jtire data` prints the tables and writes them (CSV + JSON) under --out.
+"""
+
+import csv
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from jtire.data_fits import compare_target, fit_linear, fit_power, load_targets
+from jtire.errors import ConfigError
+
+LBF_N = 4.4482216152605  # N per lbf (exact by definition of the pound-force)
+PSI_PA = 6894.757293168361  # Pa per psi
+DEFAULT_DATA_DIR = Path(__file__).resolve().parents[1] / "configs" / "data"
+TRACK_FILE = "track_rolling_resistance.csv"
+SANDBOX_FILE = "sandbox_rolling_resistance.csv"
+AXLE_NAMES = {"pusher": "pusher (track, left/right mean)", "LM": "pusher (left middle)",
+              "LF": "steer (left front)"}
+RRC_SOURCES = ("table", "ratio")
+
+
+@dataclasses.dataclass(frozen=True)
+class RunTable:
+    """Per-run measurements of one table, SI. Every array has shape (n_runs,).
+
+    source: "track" or "sandbox"; config: configuration number; label: configuration name;
+    axle: "pusher" on the track, "LM"/"LF" on the sandbox; run: run id as printed;
+    pressure_pa, nominal_load_n: the configuration's inflation (Pa) and nominal load (N);
+    fx_n, fz_n: longitudinal and vertical force (N); rrc_table: the study's per-run RRC1.
+    """
+
+    source: str
+    config: np.ndarray
+    label: np.ndarray
+    axle: np.ndarray
+    run: np.ndarray
+    pressure_pa: np.ndarray
+    nominal_load_n: np.ndarray
+    fx_n: np.ndarray
+    fz_n: np.ndarray
+    rrc_table: np.ndarray
+
+    @property
+    def rrc_ratio(self) -> np.ndarray:
+        """RRC1 recomputed as Fx / Fz from the tabulated forces, shape (n_runs,)."""
+        return self.fx_n / self.fz_n
+
+    def rrc(self, source: str = "table") -> np.ndarray:
+        if source not in RRC_SOURCES:
+            raise ConfigError(f"rrc_source = {source!r}: must be one of {RRC_SOURCES}")
+        return self.rrc_table if source == "table" else self.rrc_ratio
+
+    def select(self, mask) -> "RunTable":
+        mask = np.asarray(mask, dtype=bool)
+        arrays = [f.name for f in dataclasses.fields(self) if f.name != "source"]
+        return dataclasses.replace(self, **{k: getattr(self, k)[mask] for k in arrays})
+
+    def mask(self, pressure_psi=None, axle=None) -> np.ndarray:
+        """Boolean mask of runs at `pressure_psi` (matched to 1e-6 relative) and/or on `axle`."""
+        m = np.ones(self.fx_n.shape, dtype=bool)
+        if pressure_psi is not None:
+            m &= np.isclose(self.pressure_pa, pressure_psi * PSI_PA, rtol=1e-6)
+        if axle is not None:
+            m &= self.axle == axle
+        return m
+
+
+def _read_table(path: Path, columns: tuple) -> list:
+    if not path.is_file():
+        raise ConfigError(f"data file {path}: not found (pass --data-dir to point elsewhere)")
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(line for line in f if line.strip() and not line.startswith("#")))
+    if not rows:
+        raise ConfigError(f"data file {path}: no data rows")
+    missing = [c for c in columns if c not in rows[0]]
+    if missing:
+        raise ConfigError(f"data file {path}: missing column(s) {missing}; need {list(columns)}")
+    return rows
+
+
+def _column(rows, name, path, positive=False) -> np.ndarray:
+    try:
+        v = np.array([float(r[name]) for r in rows])
+    except (TypeError, ValueError):
+        raise ConfigError(f"{path.name} column {name}: every entry must be a number") from None
+    if not np.all(np.isfinite(v)) or (positive and np.any(v <= 0.0)):
+        raise ConfigError(f"{path.name} column {name}: must be finite"
+                          + (" and > 0" if positive else ""))
+    return v
+
+
+def _load(source: str, filename: str, data_dir, axle_column) -> RunTable:
+    path = Path(data_dir if data_dir is not None else DEFAULT_DATA_DIR) / filename
+    cols = ("config", "label", "pressure_psi", "nominal_load_lbs", "run", "fx_lbs", "fz_lbs", "rrc")
+    rows = _read_table(path, cols + ((axle_column,) if axle_column else ()))
+    n = len(rows)
+    axle = np.array([r[axle_column] for r in rows]) if axle_column else np.full(n, "pusher")
+    # The single unit conversion of the measured data: lbf -> N, psi -> Pa.
+    return RunTable(
+        source=source,
+        config=_column(rows, "config", path).astype(int),
+        label=np.array([r["label"] for r in rows]),
+        axle=axle,
+        run=np.array([r["run"] for r in rows]),
+        pressure_pa=_column(rows, "pressure_psi", path, positive=True) * PSI_PA,
+        nominal_load_n=_column(rows, "nominal_load_lbs", path, positive=True) * LBF_N,
+        fx_n=_column(rows, "fx_lbs", path) * LBF_N,
+        fz_n=_column(rows, "fz_lbs", path, positive=True) * LBF_N,
+        rrc_table=_column(rows, "rrc", path),
+    )
+
+
+def load_track(data_dir=None) -> RunTable:
+    """Rigid test-track runs (pusher axle, 15 mph), from `data_dir` or configs/data/."""
+    return _load("track", TRACK_FILE, data_dir, None)
+
+
+def load_sandbox(data_dir=None) -> RunTable:
+    """Loose dry-sand runs (left pusher LM and left steer LF, 5 mph), from `data_dir`."""
+    return _load("sandbox", SANDBOX_FILE, data_dir, "axle")
+
+
+@dataclasses.dataclass(frozen=True)
+class ConfigAverage:
+    """Per-configuration (and per-axle) averages, SI.
+
+    fx_n, fz_n: means over runs (N); rrc_study: mean of the tabulated per-run RRC (the study's
+    printed average); rrc_mean_of_ratios: mean of Fx/Fz; rrc_ratio_of_means: mean Fx / mean Fz;
+    rrc_std, rrc_sem: sample standard deviation and standard error of the tabulated RRC.
+    """
+
+    source: str
+    config: int
+    label: str
+    axle: str
+    pressure_pa: float
+    nominal_load_n: float
+    n_runs: int
+    fx_n: float
+    fz_n: float
+    rrc_study: float
+    rrc_mean_of_ratios: float
+    rrc_ratio_of_means: float
+    rrc_std: float
+    rrc_sem: float
+
+
+def config_averages(table: RunTable) -> list:
+    """One ConfigAverage per (config, axle), in the order the table lists them."""
+    keys = list(dict.fromkeys(zip(table.config.tolist(), table.axle.tolist())))
+    out = []
+    for cfg, axle in keys:
+        t = table.select((table.config == cfg) & (table.axle == axle))
+        n = t.fx_n.size
+        std = float(np.std(t.rrc_table, ddof=1)) if n > 1 else float("nan")
+        out.append(ConfigAverage(
+            source=table.source, config=int(cfg), label=str(t.label[0]), axle=str(axle),
+            pressure_pa=float(t.pressure_pa[0]), nominal_load_n=float(t.nominal_load_n[0]),
+            n_runs=n, fx_n=float(np.mean(t.fx_n)), fz_n=float(np.mean(t.fz_n)),
+            rrc_study=float(np.mean(t.rrc_table)),
+            rrc_mean_of_ratios=float(np.mean(t.rrc_ratio)),
+            rrc_ratio_of_means=float(np.mean(t.fx_n) / np.mean(t.fz_n)),
+            rrc_std=std, rrc_sem=std / np.sqrt(n)))
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class TrendFits:
+    """Linear and power-law fits of RRC on F_z for one selection of runs (arrays shape (n,))."""
+
+    name: str
+    description: str
+    fz_n: np.ndarray
+    rrc: np.ndarray
+    linear: object  # jtire.data_fits.LinearFit
+    power: object  # jtire.data_fits.PowerFit
+
+
+def trend_fits(table: RunTable, name: str, pressure_psi=None, axle=None,
+               rrc_source: str = "table", confidence: float = 0.95) -> TrendFits:
+    """Fit both trends to the runs of `table` at `pressure_psi` and on `axle` (None: all)."""
+    t = table.select(table.mask(pressure_psi, axle))
+    desc = f"{table.source}" + (f", {AXLE_NAMES.get(axle, axle)}" if axle else "") + \
+        (f", {pressure_psi:g} psi" if pressure_psi is not None else "") + f", RRC from {rrc_source}"
+    return points_trend_fits(name, desc + ", every run", t.fz_n, t.rrc(rrc_source), confidence)
+
+
+def points_trend_fits(name: str, description: str, fz_n, rrc,
+                      confidence: float = 0.95) -> TrendFits:
+    """Fit both trends to given points, fz_n (N) and rrc of shape (n,)."""
+    fz_n, rrc = np.asarray(fz_n, dtype=float), np.asarray(rrc, dtype=float)
+    return TrendFits(name, description, fz_n, rrc, fit_linear(fz_n, rrc, confidence),
+                     fit_power(fz_n, rrc, confidence))
+
+
+@dataclasses.dataclass(frozen=True)
+class DataSummary:
+    """Everything `jtire data` reports: tables, averages, fits, and targets against track fits."""
+
+    track: RunTable
+    sandbox: RunTable
+    track_averages: list
+    sandbox_averages: list
+    fits: dict  # name -> TrendFits
+    targets: list  # jtire.data_fits.Target
+    comparisons: list  # jtire.data_fits.TargetComparison (track fits only)
+
+
+def analyze(data_dir=None, reference=None, rrc_source: str = "table",
+            confidence: float = 0.95) -> DataSummary:
+    """Load both tables, average them, fit the 120 psi trends, compare the study's targets.
+
+    Fits: track_120psi (every track run at 120 psi), track_120psi_means (its 4 configuration
+    means), sandbox_LM_120psi and sandbox_LF_120psi (every run of that axle at 120 psi). The 80 psi
+    configuration is averaged but left out of the fits (a different inflation).
+    """
+    track, sandbox = load_track(data_dir), load_sandbox(data_dir)
+    fits = {
+        "track_120psi": trend_fits(track, "track_120psi", 120.0, None, rrc_source, confidence),
+        "sandbox_LM_120psi": trend_fits(sandbox, "sandbox_LM_120psi", 120.0, "LM", rrc_source,
+                                        confidence),
+        "sandbox_LF_120psi": trend_fits(sandbox, "sandbox_LF_120psi", 120.0, "LF", rrc_source,
+                                        confidence),
+    }
+    track_avg = config_averages(track)
+    # The per-run fit treats the 24 runs as independent although they cluster in 4 loads, and
+    # the configurations scatter about any smooth trend by more than their runs do (trailer2 and
+    # trailer3, 7 % apart in load, differ by 50 % in RRC). The fit through the 4 configuration
+    # means (2 degrees of freedom) carries that scatter into its intervals: a robustness check.
+    means = [a for a in track_avg if np.isclose(a.pressure_pa, 120.0 * PSI_PA, rtol=1e-6)]
+    rrc_means = [a.rrc_study if rrc_source == "table" else a.rrc_mean_of_ratios for a in means]
+    fits["track_120psi_means"] = points_trend_fits(
+        "track_120psi_means", f"track, 120 psi, configuration means of RRC from {rrc_source}",
+        [a.fz_n for a in means], rrc_means, confidence)
+    targets = load_targets(reference)
+    comparisons = [compare_target(fit, tg, name) for name in ("track_120psi", "track_120psi_means")
+                   for tg in targets for fit in (fits[name].linear, fits[name].power)]
+    return DataSummary(track, sandbox, track_avg, config_averages(sandbox), fits, targets,
+                       comparisons)
+
+
+# ---------------------------------------------------------------- command line (`jtire data`)
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--out", default="runs/data", help="output folder (default runs/data)")
+    parser.add_argument("--data-dir", default=None,
+                        help=f"folder holding {TRACK_FILE} and {SANDBOX_FILE} "
+                             "(default: the package's configs/data)")
+    parser.add_argument("--reference", default=None,
+                        help="TOML with [calibration.targets.rolling_resistance_*] "
+                             "(default configs/reference_xone_xda.toml)")
+    parser.add_argument("--rrc", choices=RRC_SOURCES, default="table",
+                        help="per-run RRC for the fits: the study's column (table) "
+                             "or Fx/Fz (ratio)")
+    parser.add_argument("--confidence", type=float, default=0.95,
+                        help="two-sided confidence level of every interval (default 0.95)")
+
+
+def _average_rows(avgs) -> list:
+    return [[a.source, a.config, a.label, a.axle, a.pressure_pa / PSI_PA, a.n_runs,
+             a.fx_n / LBF_N, a.fz_n / LBF_N, a.fx_n, a.fz_n, a.rrc_study, a.rrc_mean_of_ratios,
+             a.rrc_ratio_of_means, a.rrc_std, a.rrc_sem] for a in avgs]
+
+
+AVERAGE_HEADER = ["source", "config", "label", "axle", "pressure_psi", "n_runs", "fx_lbf",
+                  "fz_lbf", "fx_N", "fz_N", "rrc_study", "rrc_mean_of_ratios",
+                  "rrc_ratio_of_means", "rrc_std", "rrc_sem"]
+
+
+def _fit_rows(fits) -> list:
+    rows = []
+    for f in fits.values():
+        lin, pw = f.linear, f.power
+        n, conf = lin.line.n, lin.line.confidence
+        rows += [[f.name, "linear", "a", lin.a, *lin.a_ci, lin.line.stderr[0], n, conf],
+                 [f.name, "linear", "b_per_N", lin.b, *lin.b_ci, lin.line.stderr[1], n, conf],
+                 [f.name, "power", "c", pw.c, *pw.c_ci, float("nan"), n, conf],
+                 [f.name, "power", "d", pw.d, *pw.d_ci, pw.log_line.stderr[1], n, conf]]
+    return rows
+
+
+def _print_averages(title, avgs) -> None:
+    print(f"\n{title}")
+    print(f"{'cfg':>3} {'label':<22} {'axle':<6} {'psi':>4} {'n':>2} {'Fx lbf':>10} "
+          f"{'Fz lbf':>10} {'Fx N':>10} {'Fz N':>10} {'RRC study':>10} {'mean Fx/Fz':>10} "
+          f"{'mFx/mFz':>9} {'sem':>8}")
+    for r in _average_rows(avgs):
+        print(f"{r[1]:>3} {r[2]:<22} {r[3]:<6} {r[4]:>4.0f} {r[5]:>2} {r[6]:>10.5f} {r[7]:>10.3f} "
+              f"{r[8]:>10.3f} {r[9]:>10.1f} {r[10]:>10.6f} {r[11]:>10.6f} {r[12]:>9.6f} "
+              f"{r[14]:>8.6f}")
+
+
+def _interval(lo, hi) -> str:
+    return f"{f'[{lo:.5f},{hi:.5f}]':>19}"
+
+
+def run_cli(args) -> int:
+    from jtire.io import atomic_write_csv, atomic_write_json
+
+    if not 0.0 < args.confidence < 1.0:
+        raise ConfigError(f"--confidence = {args.confidence}: must be in (0, 1)")
+    s = analyze(args.data_dir, args.reference, args.rrc, args.confidence)
+    out = Path(args.out)
+    pct = f"{100 * args.confidence:g}%"
+
+    _print_averages("Track (rigid oval, 15 mph), per-configuration averages", s.track_averages)
+    _print_averages("Sandbox (loose dry sand, 5 mph), per-configuration averages",
+                    s.sandbox_averages)
+
+    print(f"\nFits of RRC on Fz (runs at 120 psi, RRC from '{args.rrc}', {pct} CIs, Fz in N)")
+    print(f"{'dataset':<18} {'model':<7} {'param':<8} {'value':>12} {'ci low':>12} "
+          f"{'ci high':>12} {'n':>3}")
+    fit_rows = _fit_rows(s.fits)
+    for r in fit_rows:
+        print(f"{r[0]:<18} {r[1]:<7} {r[2]:<8} {r[3]:>12.5g} {r[4]:>12.5g} {r[5]:>12.5g} {r[7]:>3}")
+
+    print(f"\nStudy rolling-resistance targets against the track 120 psi fits ({pct} bands)")
+    print(f"{'fit':<19} {'target':<21} {'Fz kN':>5} {'RRC tgt':>8} {'model':<7} {'trend':>8} "
+          f"{'CI of trend':>19} {'new-point band':>19} {'z trend':>7} {'z pt':>5} {'% off':>7}")
+    cmp_rows = []
+    for c in s.comparisons:
+        cmp_rows.append([c.dataset, c.target, c.load_n, c.target_rrc, c.model, c.pred, c.lower,
+                         c.upper, c.obs_lower, c.obs_upper, c.z_mean, c.z_obs, c.percent,
+                         c.inside_ci])
+        print(f"{c.dataset:<19} {c.target:<21} {c.load_n / 1e3:>5.1f} {c.target_rrc:>8.5f} "
+              f"{c.model:<7} {c.pred:>8.5f} {_interval(c.lower, c.upper)} "
+              f"{_interval(c.obs_lower, c.obs_upper)} {c.z_mean:>7.1f} {c.z_obs:>5.1f} "
+              f"{c.percent:>+7.1f}")
+    print("z trend: target - trend in standard errors of the trend; z pt: in standard errors of "
+          "one new fitted point (a run, or a configuration mean); power law in ln RRC; "
+          "% off: target / trend - 1")
+
+    atomic_write_csv(out / "track_averages.csv", AVERAGE_HEADER, _average_rows(s.track_averages))
+    atomic_write_csv(out / "sandbox_averages.csv", AVERAGE_HEADER,
+                     _average_rows(s.sandbox_averages))
+    atomic_write_csv(out / "fits.csv", ["dataset", "model", "param", "value", "ci_low", "ci_high",
+                                        "stderr", "n", "confidence"], fit_rows)
+    atomic_write_csv(out / "target_comparison.csv",
+                     ["dataset", "target", "load_N", "target_rrc", "model", "fit_rrc", "ci_low",
+                      "ci_high", "point_band_low", "point_band_high", "z_mean", "z_point",
+                      "percent", "inside_ci"],
+                     cmp_rows)
+    atomic_write_json(out / "fits.json", {
+        "rrc_source": args.rrc, "confidence": args.confidence, "units": "Fz in N, RRC = Fx/Fz",
+        "fits": {k: {"description": f.description, "linear": f.linear.as_dict(),
+                     "power": f.power.as_dict()} for k, f in s.fits.items()},
+        "targets": [dataclasses.asdict(t) | {"rrc": t.rrc} for t in s.targets],
+        "comparisons": [dataclasses.asdict(c) | {"inside_ci": c.inside_ci}
+                        for c in s.comparisons]})
+    print(f"\nwrote {out}/track_averages.csv, sandbox_averages.csv, fits.csv, "
+          "target_comparison.csv, fits.json")
+    return 0

@@ -1,0 +1,181 @@
+"""Static experiments on a flat rigid road: E01 footprint, E02 vertical stiffness, E09 lateral.
+
+Each is one jitted program (inflate -> first contact -> load ramp -> settle [-> lateral ramp ->
+settle]) with conditions as array arguments, so a load or pressure sweep vmaps over it and
+compiles once. Reductions run on the host afterwards (jtire.signals). Signs: internal ISO axes (z
+up); deflections and stiffnesses are reported as positive magnitudes.
+"""
+
+import time
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import signals, solve
+from ..physics import tread
+from . import phases
+from .result import ExperimentResult
+
+DOWN = np.array([0.0, 0, -1, 0, 0, 0])
+LEFT = np.array([0.0, 1, 0, 0, 0, 0])
+
+
+@eqx.filter_jit
+def _loaded(model, params, pressure, load, dt, proto, ramp, hold, steps_inflate: int, steps_load: int,
+            n_save: int = 64):
+    """Inflate, touch the road, ramp the vertical load to `load` over `ramp` s, settle."""
+    inf = phases.inflate(model, params, pressure, dt, proto, steps_inflate)
+    z0 = phases.first_contact_height(model, inf.y)
+    road = phases.flat_road(z0)
+    ld = phases.load_phase(model, params, pressure, dt, proto, inf.y, inf.t_end, road, jnp.zeros(6),
+                           load * DOWN, phases.RIM_Z, ramp, ramp + hold, steps_load, n_save=n_save)
+    return inf, z0, ld
+
+
+@eqx.filter_jit
+def _lateral(model, params, pressure, load, lateral, dt, proto, steps_inflate: int, steps_load: int):
+    inf, z0, ld = _loaded(model, params, pressure, load, dt, proto, proto.load_ramp, proto.settle_max,
+                          steps_inflate, steps_load)
+    road = phases.flat_road(z0)
+    lat = phases.load_phase(model, params, pressure, dt, proto, ld.y, ld.t_end, road, load * DOWN,
+                            load * DOWN + lateral * LEFT, phases.RIM_YZ, proto.load_ramp,
+                            proto.load_ramp + proto.settle_max, steps_load)
+    return inf, z0, ld, lat
+
+
+def footprint(model, y, z_road, n_fine: int = 24):
+    """Contact patch length (x) and width (y), m, of state y on the road z = z_road.
+
+    The tread surface is interpolated bilinearly over each tread quad (n_fine^2 samples) and the
+    in-contact region is where it lies below the road, so the patch edges are resolved between
+    nodes rather than snapped to them.
+    """
+    X = model.assemble(y.x, y.q)
+    n_tread = len(model.tread_cols_t)
+    p = np.asarray(tread.tread_points(X, model.tread_cols, model.tread_depth, 1, model.normal_sign))
+    p = p.reshape(model.n_theta, n_tread, 3)
+    q = np.roll(p, -1, axis=0)
+    u = np.linspace(0, 1, n_fine)[:, None, None, None, None]  # circumferential
+    v = np.linspace(0, 1, n_fine)[None, :, None, None, None]  # lateral
+    a, b, c, d = p[:, :-1], p[:, 1:], q[:, :-1], q[:, 1:]
+    S = (1 - u) * (1 - v) * a + (1 - u) * v * b + u * (1 - v) * c + u * v * d
+    S = S.reshape(-1, 3)
+    inside = S[:, 2] < float(z_road)
+    if not inside.any():
+        return 0.0, 0.0, 0.0
+    pts = S[inside]
+    length = float(pts[:, 0].max() - pts[:, 0].min())
+    width = float(pts[:, 1].max() - pts[:, 1].min())
+    # contact area from the in-contact fraction of each quad's samples
+    area_q = np.linalg.norm(np.cross(c - a, b - a), axis=-1)  # (T, n_tread-1) approx quad areas
+    frac = inside.reshape(n_fine, n_fine, model.n_theta, n_tread - 1).mean(axis=(0, 1))
+    return length, width, float((frac * area_q).sum())
+
+
+def _phase_checks(model, name, res, require=True):
+    solve.check_phase(name, res, model, require_settled=require)
+    return {f"{name}_settled": bool(res.settled), f"{name}_t_end_s": float(res.t_end),
+            f"{name}_kinetic_energy_J": float(solve.kinetic_energy(model, res.y)), f"{name}_steps": int(res.n_steps)}
+
+
+def _setup(tire, pressure, proto, extra_time):
+    dt = solve.stable_step(tire.model, tire.params, pressure, float(proto.settle_damping))
+    si = phases.steps_for(float(proto.inflate_max), dt)
+    sl = phases.steps_for(float(extra_time), dt)
+    return dt, si, sl
+
+
+def _contact_check(res, load):
+    """Vertical contact force vs applied load at the settled state (relative error)."""
+    fz = float(np.asarray(res.saved["contact_force"])[_last(res), 2])
+    return fz, abs(fz - load) / load
+
+
+def _last(res):
+    t = np.asarray(res.saved["ke"])
+    ok = np.isfinite(t)
+    return int(np.nonzero(ok)[0][-1])
+
+
+def run_footprint(tire, condition, proto):
+    """E01: contact length 2a and width w under the condition's load (settled)."""
+    p, load = condition["pressure_Pa"], condition["load_N"]
+    dt, si, sl = _setup(tire, p, proto, float(proto.load_ramp + proto.settle_max))
+    t0 = time.perf_counter()
+    inf, z0, ld = jax.block_until_ready(_loaded(tire.model, tire.params, jnp.asarray(p), jnp.asarray(load), jnp.asarray(dt),
+                                                proto, proto.load_ramp, proto.settle_max, si, sl))
+    wall = time.perf_counter() - t0
+    checks = _phase_checks(tire.model, "inflate", inf) | _phase_checks(tire.model, "load", ld)
+    length, width, area = footprint(tire.model, ld.y, z0)
+    deflection = -float(ld.y.q[2])
+    fz, err = _contact_check(ld, load)
+    checks |= {"contact_force_N": fz, "contact_vs_load_rel_error": err}
+    R = tire.spec.geometry.outer_radius
+    chord = 2 * np.sqrt(max(R**2 - (R - deflection) ** 2, 0.0))
+    ref = tire.spec.reference
+    q = {"contact_length_m": length, "contact_width_m": width, "contact_half_length_m": length / 2,
+         "contact_area_m2": area, "deflection_m": deflection, "geometric_chord_m": chord,
+         "measured_contact_length_m": ref["footprint_length_mm"] or None,
+         "measured_contact_width_m": ref["footprint_width_mm"] or None}
+    return ExperimentResult("footprint", condition, q, checks=checks, info=_info(dt, wall, inf, ld))
+
+
+def _info(dt, wall, *phases_):
+    steps = sum(int(r.n_steps) for r in phases_)
+    t_sim = float(phases_[-1].t_end)
+    return {"dt_s": dt, "steps": steps, "simulated_s": t_sim, "wall_s_including_compile": wall}
+
+
+def run_vertical_stiffness(tire, condition, proto, max_load, stated_load, ramp, fit_range):
+    """E02: quasi-static vertical load ramp 0 -> max_load; k_sv secant at `stated_load` and the
+    slope of a linear fit of load against deflection over `fit_range` (N)."""
+    p = condition["pressure_Pa"]
+    dt, si, sl = _setup(tire, p, proto, float(ramp + proto.settle_max))
+    t0 = time.perf_counter()
+    inf, z0, ld = jax.block_until_ready(_loaded(tire.model, tire.params, jnp.asarray(p), jnp.asarray(max_load), jnp.asarray(dt),
+                                                proto, jnp.asarray(ramp), proto.settle_max, si, sl, n_save=241))
+    wall = time.perf_counter() - t0
+    checks = _phase_checks(tire.model, "inflate", inf) | _phase_checks(tire.model, "load", ld)
+    s = ld.saved
+    t = np.asarray(jnp.linspace(inf.t_end, inf.t_end + ramp + proto.settle_max, 241))
+    valid = np.isfinite(np.asarray(s["ke"]))
+    in_ramp = valid & (t <= float(inf.t_end) + ramp)
+    defl = -np.asarray(s["q"])[:, 2]
+    load = -np.asarray(s["rim_force"])[:, 2]
+    fz = np.asarray(s["contact_force"])[:, 2]
+    d_r, l_r, f_r = defl[in_ramp], load[in_ramp], fz[in_ramp]
+    sec = signals.secant(d_r, l_r, stated_load, along="y")
+    fit = signals.linear_slope(d_r, l_r, x_range=None) if fit_range is None else None
+    mask = (l_r >= fit_range[0]) & (l_r <= fit_range[1])
+    fit = signals.linear_slope(d_r[mask], l_r[mask])
+    end = _last(ld)
+    d_static, l_static = defl[end], load[end]
+    d_ramp_at_max = float(np.interp(l_static, l_r, d_r))
+    checks |= {"quasi_static_deflection_rel_error": abs(d_ramp_at_max - d_static) / d_static,
+               "contact_vs_load_max_rel_error_in_ramp": float(np.max(np.abs(f_r - l_r)[l_r > 0.1 * max_load] / l_r[l_r > 0.1 * max_load]))}
+    q = {"k_sv_N_per_m": sec.secant, "k_sv_fit_N_per_m": fit.slope, "deflection_m": sec.x_at,
+         "stated_load_N": stated_load, "max_load_N": max_load, "fit_r2": fit.r2,
+         "settled_deflection_at_max_load_m": float(d_static)}
+    sig = {"time_s": t[in_ramp], "load_N": l_r, "contact_force_N": f_r, "deflection_m": d_r}
+    return ExperimentResult("vertical_stiffness", condition, q, signals=sig, checks=checks, info=_info(dt, wall, inf, ld))
+
+
+def run_lateral_stiffness(tire, condition, proto, lateral_force):
+    """E09 (static part): loaded tire, lateral force at the rim centre, settled: k_l = F / y_ss."""
+    p, load = condition["pressure_Pa"], condition["load_N"]
+    dt, si, sl = _setup(tire, p, proto, float(proto.load_ramp + proto.settle_max))
+    t0 = time.perf_counter()
+    inf, z0, ld, lat = jax.block_until_ready(_lateral(
+        tire.model, tire.params, jnp.asarray(p), jnp.asarray(load), jnp.asarray(lateral_force), jnp.asarray(dt), proto, si, sl))
+    wall = time.perf_counter() - t0
+    checks = (_phase_checks(tire.model, "inflate", inf) | _phase_checks(tire.model, "load", ld)
+              | _phase_checks(tire.model, "lateral", lat))
+    y_ss = float(lat.y.q[1] - ld.y.q[1])
+    fy_contact = float(np.asarray(lat.saved["contact_force"])[_last(lat), 1])
+    checks |= {"contact_lateral_force_N": fy_contact,
+               "contact_vs_lateral_rel_error": abs(abs(fy_contact) - lateral_force) / lateral_force,
+               "vertical_deflection_m": -float(ld.y.q[2])}
+    q = {"k_l_N_per_m": lateral_force / abs(y_ss), "lateral_deflection_m": abs(y_ss), "lateral_force_N": lateral_force}
+    return ExperimentResult("lateral_stiffness", condition, q, checks=checks, info=_info(dt, wall, inf, ld, lat))

@@ -1,0 +1,75 @@
+"""Assembles every force term into the accelerations of one step (the model's vector field).
+
+One linearization of the strain map gives both the strain rates (for the Maxwell branches) and
+the internal forces (its transpose applied to the stresses); pressure is p * grad V; the contact
+forces act at the tread points and come back to nodes and rim through the transposed
+linearization of the tread-point map. Nothing here loops over nodes, elements or time.
+"""
+
+import jax
+import jax.numpy as jnp
+
+from ..materials import prony_weights
+from ..state import Update
+from . import rim
+from .contact import OMEGA_REF, contact_forces
+
+
+def evaluate(model, params, drive, t, y):
+    """Forces on the state `y` at time t. Returns (Update, diagnostics dict).
+
+    One linearization of the kinematic map Y -> (strains, cavity volume, tread points) gives all
+    rates (its jvp) and all nodal forces (its transpose applied to (-stress, pressure, contact
+    force)): a single forward and a single backward pass per step.
+    """
+    Y, Yd = (y.x, y.q), (y.v, y.qd)
+
+    def kinematics(Y_):
+        X = model.assemble(*Y_)
+        return model.strains(X), model.volume(X), model.tread_points(X)
+
+    (s, V, P), lin = jax.linearize(kinematics, Y)
+    sdot, _, Pdot = lin(Yd)
+    K = model.stiffness(params)
+    # Maxwell branches, integrated exactly for a constant strain rate over the step. They are
+    # advanced with the strain rate that brought the net to its current shape (v of this state
+    # is the velocity of the last position update) before their stress is used, as the bristles
+    # are: updating them after would apply a one-step-old stress, which destabilizes the scheme.
+    tau = jnp.asarray(params.relaxation_times)
+    cb = jnp.asarray(prony_weights(params.relaxation_times))
+    Kb = cb[:, None] * (model.strain_loss(params) * K)[None, :]
+    decay = jnp.exp(-drive.dt / tau)[:, None]
+    maxwell = y.maxwell * decay + Kb * sdot[None, :] * tau[:, None] * (1 - decay)
+    safe_Kb = jnp.where(Kb > 0, Kb, 1.0)
+    p_visc = jnp.sum(jnp.where(Kb > 0, maxwell**2 / (safe_Kb * tau[:, None]), 0.0))
+    sigma = K * (s - model.s0) + jnp.sum(maxwell, axis=0)
+
+    p = drive.pressure(t)
+    k_n, k_t, _ = model.contact_stiffness(params)
+    c_n = params.tread_loss * k_n / OMEGA_REF
+    F, bristle, F_n, gap, p_tread = contact_forces(drive.surface, P, Pdot, t, y.bristle, k_n, k_t, c_n,
+                                                   params.friction, drive.dt)
+    ((fx, fq),) = jax.linear_transpose(lin, Y)((-sigma, p, F))
+
+    # dynamic-relaxation damping on velocities relative to the rim frame (alpha = 1: the rim
+    # takes the reaction; needed whenever the rim moves or spins) or to the ground (alpha = 0:
+    # a slowly loaded, non-rolling tire, where damping relative to a descending rim would
+    # resist the deflection itself and bias a quasi-static load-deflection curve)
+    m = model.node_mass[..., None]
+    alpha = drive.damp_rim_frame
+    v_rel = y.v - alpha * rim.frame_velocity(y.q, y.qd, y.x)
+    f_d = -drive.settle_damping * m * v_rel
+    r = (y.x - y.q[:3]).reshape(-1, 3)
+    fdf = alpha * f_d.reshape(-1, 3)
+    fq = fq + jnp.concatenate([-fdf.sum(0), -jnp.cross(r, fdf).sum(0)])
+    fx = fx + f_d
+    p_settle = -jnp.sum(f_d * v_rel)
+
+    M_rim = jnp.concatenate([jnp.full(3, model.rim_mass), model.rim_inertia])
+    g6 = jnp.concatenate([drive.gravity * model.rim_mass, jnp.zeros(3)])
+    ax = fx / m + drive.gravity
+    aq = (fq + drive.rim_force(t) + g6) / M_rim
+
+    upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle)
+    diag = dict(P=P, F=F, F_n=F_n, gap=gap, pressure=p, volume=V)
+    return upd, diag

@@ -1,0 +1,86 @@
+"""The simulation state, the per-step drive (loads, motions, surfaces), and the step update.
+
+Pure state-in/state-out (house rule 3): `TireState.advance` is the kinematic part of the
+symplectic (semi-implicit) Euler step: velocities first from the accelerations at the old state,
+then positions with the new velocities. Internal variables (Maxwell stresses, bristles) arrive
+already updated from the vector field, which integrates them exactly over the step.
+"""
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .physics.contact import AbstractSurface
+from .physics.geometry_ops import smooth_step
+
+
+class TireState(eqx.Module):
+    """x, v: (T, S-2, 3) free nodes (m, m/s); q, qd: (6,) rim; maxwell: (B, n_strain) branch
+    stresses; bristle: (N, 3) tread shear deflections (m); dissipated: J in the rubber (Maxwell
+    branches and tread), settle_work: J removed by the artificial settling damping."""
+
+    x: Float[Array, "T F 3"]
+    v: Float[Array, "T F 3"]
+    q: Float[Array, " 6"]
+    qd: Float[Array, " 6"]
+    maxwell: Float[Array, "B n"]
+    bristle: Float[Array, "N 3"]
+    dissipated: Float[Array, ""]
+    settle_work: Float[Array, ""]
+
+    @staticmethod
+    def at_rest(model, n_branches: int):
+        z = jnp.zeros(())
+        return TireState(model.x_ref, jnp.zeros_like(model.x_ref), jnp.zeros(6), jnp.zeros(6),
+                         jnp.zeros((n_branches, model.s0.shape[0])), jnp.zeros((model.n_points, 3)), z, z)
+
+    def advance(self, upd: "Update", h, drive: "Drive"):
+        free = drive.rim_free
+        qd = jnp.where(free, self.qd + h * upd.aq, drive.rim_velocity)
+        v = self.v + h * upd.ax
+        return TireState(self.x + h * v, v, self.q + h * qd, qd, upd.maxwell, upd.bristle,
+                         self.dissipated + h * upd.power_rubber, self.settle_work + h * upd.power_settle)
+
+
+class Update(eqx.Module):
+    """What the vector field returns for one step: accelerations and updated internal variables."""
+
+    ax: Array
+    aq: Array
+    maxwell: Array
+    bristle: Array
+    power_rubber: Array
+    power_settle: Array
+
+
+class Drive(eqx.Module):
+    """Everything imposed on the tire during one phase, as arrays (so phases and cases vmap).
+
+    Pressure and rim loads ramp smoothly from their start to their end values over
+    [t_ramp0, t_ramp1]; rim DOFs with rim_free = 0 follow rim_velocity (0 = locked).
+    settle_damping (1/s): mass-proportional damping for dynamic relaxation, on velocities
+    relative to the rim frame (damp_rim_frame = 1) or to the ground (0); 0 in dynamic experiments.
+    """
+
+    pressure0: Float[Array, ""]
+    pressure1: Float[Array, ""]
+    force0: Float[Array, " 6"]
+    force1: Float[Array, " 6"]
+    t_ramp0: Float[Array, ""]
+    t_ramp1: Float[Array, ""]
+    rim_free: Float[Array, " 6"]
+    rim_velocity: Float[Array, " 6"]
+    surface: AbstractSurface
+    settle_damping: Float[Array, ""]
+    damp_rim_frame: Float[Array, ""]
+    gravity: Float[Array, " 3"]
+    dt: Float[Array, ""]
+
+    def ramp(self, t):
+        return smooth_step((t - self.t_ramp0) / jnp.maximum(self.t_ramp1 - self.t_ramp0, 1e-12))
+
+    def pressure(self, t):
+        return self.pressure0 + (self.pressure1 - self.pressure0) * self.ramp(t)
+
+    def rim_force(self, t):
+        return self.force0 + (self.force1 - self.force0) * self.ramp(t)
