@@ -33,6 +33,7 @@ def time_layout(name: str, spec: SoilSpec, repeats: int) -> dict:
         simulate_sinkage(1200.0 + 1000.0 * k / max(repeats - 1, 1), 2e6 + 1e4 * k, spec)
         walls.append(time.perf_counter() - t0)
         cpus.append(time.process_time() - c0)
+    its = res.newton_iterations
     return dict(
         layout=name,
         elements=mesh.n_elements,
@@ -43,7 +44,7 @@ def time_layout(name: str, spec: SoilSpec, repeats: int) -> dict:
         run_median_ms=1e3 * np.median(walls),
         run_best_ms=1e3 * np.min(walls),
         run_cpu_ms=1e3 * np.median(cpus),  # all threads of this process
-        newton=f"{res.newton_iterations.sum()} ({res.newton_iterations.min()}-{res.newton_iterations.max()}/step)",
+        newton=f"{its.sum()} ({its.min()}-{its.max()}/step)",
         sinkage_mm=1e3 * res.sinkage_m,
         recompiles=run._cache_size() - 1,
     )
@@ -51,7 +52,10 @@ def time_layout(name: str, spec: SoilSpec, repeats: int) -> dict:
 
 def print_table(rows: list) -> None:
     keys = list(rows[0])
-    cells = [[k] + [f"{r[k]:.3g}" if isinstance(r[k], float) else str(r[k]) for r in rows] for k in keys]
+    def fmt(v):
+        return f"{v:.3g}" if isinstance(v, float) else str(v)
+
+    cells = [[k] + [fmt(r[k]) for r in rows] for k in keys]
     width = [max(len(c[i]) for c in cells) for i in range(len(rows) + 1)]
     for c in cells:
         print("  ".join(s.rjust(w) for s, w in zip(c, width)))
@@ -75,7 +79,8 @@ def scan(spec: SoilSpec, n: int) -> None:
     print(f"\nvalley E*(rho) for target {1e3 * target:.4f} mm (error checked by a direct run)")
     for r in rhos:
         e_star = simulate_sinkage(r, 2e6, spec).sinkage_m * 2e6 / target
-        print(f"  rho {r:6.0f}  E* = {e_star / 1e6:.4f} MPa  error {f(np.array([r, e_star])):.2e} %")
+        err_star = f(np.array([r, e_star]))
+        print(f"  rho {r:6.0f}  E* = {e_star / 1e6:.4f} MPa  error {err_star:.2e} %")
 
 
 def main() -> None:

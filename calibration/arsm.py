@@ -99,6 +99,19 @@ _T = os.environ.get("ARSM_T", "none")
 _Z = os.environ.get("ARSM_Z", "1") == "1"
 
 
+def _agrees(surf, u, f, region, x_new, pred, f_new, tol):
+    """Surface and truth agree: at the new point to tol, and at every fitted point inside the
+    region (leave-one-out, where defined) to sqrt(tol), both relative to the spread of the values inside the
+    region; and the new point is not on a face the region could still pan across."""
+    inside = surf.idx[inherit(u[surf.idx], region)]
+    if inside.size == 0 or _on_inner_face(x_new, region):
+        return False
+    spread = float(np.ptp(np.append(f[inside], f_new)))
+    loo = surf.loo_residuals[np.isin(surf.idx, inside)]
+    loo = loo[np.isfinite(loo)]  # an interpolated point has no leave-one-out residual
+    return bool(abs(pred - f_new) <= tol * spread and np.all(np.abs(loo) <= np.sqrt(tol) * spread))
+
+
 def _fit(u, f, region, n_want):
     if _T == "square":
         f = f**2
@@ -200,7 +213,6 @@ def minimize(
                 fill(region, it)
                 u, f = np.array(u_list), np.array(f_list, dtype=float)
             surf = _fit(u, f, region, n_want)
-            local = surf is not None and bool(np.all(inherit(u[surf.idx], region)))
             if surf is None:  # failed calls left too few points for even a plane
                 fill(region, it)
             else:
@@ -216,10 +228,8 @@ def minimize(
                     failed = not (f_new < f_best)
                     # agreement: at the minimizer to tol, over the fitted points (leave-one-out)
                     # to sqrt(tol), and not on a face the region could still pan across
-                    if (tol > 0 and np.isfinite(f_new) and local
-                            and abs(pred - f_new) <= tol * surf.spread
-                            and surf.loo_rmse <= np.sqrt(tol) * surf.spread
-                            and not _on_inner_face(x_new, region)):
+                    if tol > 0 and np.isfinite(f_new) and _agrees(surf, u, f, region, x_new,
+                                                                  pred, f_new, tol):
                         raise _Stop("agreement")
             if region_rule == "srsm":
                 f = np.array(f_list, dtype=float)

@@ -121,7 +121,9 @@ class SoilSpec:
             if f"{ang}_deg" in kw:
                 v = kw.pop(f"{ang}_deg")
                 if not isinstance(v, (int, float)) or isinstance(v, bool) or not lo <= v <= 50.0:
-                    raise ConfigError(f"soil.{ang}_deg = {v!r}: must be a number in [{lo:g}, 50] deg")
+                    raise ConfigError(
+                        f"soil.{ang}_deg = {v!r}: must be a number in [{lo:g}, 50] deg"
+                    )
                 kw[f"{ang}_rad"] = math.radians(v)
         names = {f.name for f in dataclasses.fields(cls)}
         for key in kw:
@@ -152,7 +154,8 @@ class SoilResult:
         sinkage_m: plate settlement at the full pressure (m, positive down).
         pressure_history_Pa: (n_load_steps + 1,) plate pressure, starting at 0 (Pa).
         sinkage_history_m: (n_load_steps + 1,) settlement at those pressures (m).
-        converged: every load step met the Newton tolerance.
+        converged: every load step met the Newton tolerance (always True on return, since a
+            failed step raises SimulationError; kept for callers that log results).
         newton_iterations: (n_load_steps,) Newton iterations (linear solves) per step.
     """
 
@@ -181,7 +184,9 @@ def _dp_constants(phi, psi):
     angles, outer cone (triaxial compression, the state under a loaded plate)."""
     s, sp = jnp.sin(phi), jnp.sin(psi)
     root3 = math.sqrt(3.0)
-    return 6 * s / (root3 * (3 - s)), 6 * jnp.cos(phi) / (root3 * (3 - s)), 6 * sp / (root3 * (3 - sp))
+    eta = 6 * s / (root3 * (3 - s))
+    xi = 6 * jnp.cos(phi) / (root3 * (3 - s))
+    return eta, xi, 6 * sp / (root3 * (3 - sp))
 
 
 def _k0_range(phi: float) -> tuple:
@@ -327,7 +332,8 @@ def simulate_sinkage(density_kg_m3: float, youngs_modulus_Pa: float, spec: SoilS
         if not (np.isfinite(v) and v > 0):
             raise ConfigError(f"soil {name} = {v!r}: must be a finite number > 0")
     run, _ = _solver(_layout(spec))
-    sink, ok, its, res = (np.asarray(x) for x in run(_theta(density_kg_m3, youngs_modulus_Pa, spec)))
+    out = run(_theta(density_kg_m3, youngs_modulus_Pa, spec))
+    sink, ok, its, res = (np.asarray(x) for x in out)
     if not ok.all():
         k = int(np.argmin(ok))
         raise SimulationError(

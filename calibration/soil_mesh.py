@@ -15,8 +15,11 @@ bottom; every surface node under the plate shares ONE vertical degree of freedom
 settlement: a rigid, smooth plate; those nodes slide radially freely, as in the Boussinesq
 frictionless rigid punch).
 
-Everything here is numpy and static (the topology of the jitted solve); strain-displacement
-matrices are precomputed per Gauss point.
+Unknowns are numbered row by row (one node row = one block, padded to a common size), so the
+stiffness is block-tridiagonal and `block_tridiagonal_solve` factors it in O(rows * m^3).
+
+Everything in SoilMesh is numpy and static (the topology of the jitted solve); strain-
+displacement matrices are precomputed per Gauss point.
 """
 
 import dataclasses
@@ -139,7 +142,10 @@ def build_mesh(
     a = plate_radius_m
     h0 = a / n_r_plate
     r = np.concatenate(
-        [np.linspace(0.0, a, n_r_plate + 1), a + graded_spacing(block_radius_m - a, n_r_outer, h0)[1:]]
+        [
+            np.linspace(0.0, a, n_r_plate + 1),
+            a + graded_spacing(block_radius_m - a, n_r_outer, h0)[1:],
+        ]
     )
     z = -graded_spacing(block_depth_m, n_z, h0)  # z[0] = 0 at the surface, decreasing downward
     nr = r.size
@@ -168,7 +174,8 @@ def build_mesh(
     free_r = ~(on_axis | on_wall | on_bottom)
     free_z = ~(on_bottom | under_plate)
     row = np.arange(nodes.shape[0]) // nr
-    count = np.bincount(row, weights=free_r.astype(int) + free_z.astype(int), minlength=n_z + 1).astype(int)
+    n_per_node = free_r.astype(int) + free_z.astype(int)
+    count = np.bincount(row, weights=n_per_node, minlength=n_z + 1).astype(int)
     count[0] += 1  # the plate
     n_blocks, size = n_z, int(count.max())
     n_free = n_blocks * size

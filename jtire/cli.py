@@ -13,7 +13,7 @@ import sys
 # subcommand -> (module, one-line help). Each module defines `add_arguments(parser)` and
 # `run_cli(args) -> int`. Imports are lazy so `jtire --help` is instant.
 SUBCOMMANDS = {
-    "run": ("jtire.run_cli", "run one virtual experiment from a TOML config"),
+    "run": ("jtire.run_cli", "run virtual experiments from a TOML config (default: the static experiments at rated)"),
     "sweep": ("jtire.sweep_cli", "run an experiment over the load x pressure grid (vmapped)"),
     "compete": ("calibration.competition", "ARSM vs GA vs Monte Carlo on the soil-block simulation"),
     "data": ("jtire.data", "measured test-track and sandbox rolling-resistance tables and fits"),

@@ -108,14 +108,14 @@ def _validate(raw: dict, schema: dict, prefix: str = "") -> dict:
         if isinstance(sub, dict):
             if key not in raw:
                 if all(isinstance(f, F) and f.default is not None for f in sub.values()):
-                    out[key] = {k: f.default for k, f in sub.items()}
+                    out[key] = _validate({}, sub, path + ".")
                     continue
                 raise ConfigError(f"{path}: missing table")
             out[key] = _validate(raw[key], sub, path + ".")
         elif key in raw:
             out[key] = sub.parse(path, raw[key])
         elif sub.default is not None:
-            out[key] = sub.default
+            out[key] = sub.parse(path, sub.default)  # defaults are in the file's units too
         else:
             raise ConfigError(f"{path}: missing field{sub._range()}")
     return out
@@ -213,3 +213,57 @@ def tire_from_dict(raw: dict) -> TireSpec:
 
 def load_tire(path, overrides=()) -> TireSpec:
     return tire_from_dict(apply_overrides(load_toml(path), overrides))
+
+
+# ---- experiment configs ------------------------------------------------------------------------
+CONDITION_SCHEMA = {
+    "load_kg": F(float, U.G0, 0, 50000, None, "kg of load"), "load_kN": F(float, U.KN, 0, 500, None, "kN"),
+    "load_lbs": F(float, U.LBF, 0, 110000, None, "lbs"),
+    "pressure_psi": F(float, U.PSI, 10, 250, None, "psi"), "pressure_kPa": F(float, 1e3, 70, 1700, None, "kPa"),
+    "pressure_bar": F(float, 1e5, 0.7, 17, None, "bar"),
+}
+
+SOLVER_SCHEMA = {
+    "settle_damping_per_s": F(float, 1, 1, 1e4, 300.0, "1/s"),
+    "ke_tol_J": F(float, 1, 1e-9, 10, 1e-3, "J"),
+    "inflate_ramp_s": F(float, 1, 1e-3, 1, 0.04, "s"),
+    "inflate_max_s": F(float, 1, 0.01, 5, 0.4, "s"),
+    "load_ramp_s": F(float, 1, 1e-3, 5, 0.1, "s"),
+    "settle_max_s": F(float, 1, 0.01, 5, 0.5, "s"),
+}
+
+
+def _one_of(table: dict, keys, what: str, path: str):
+    given = [k for k in keys if k in table]
+    if len(given) != 1:
+        raise ConfigError(f"{path}: give exactly one of {', '.join(keys)} for the {what} (got {len(given)})")
+    return given[0]
+
+
+def parse_condition(raw: dict, need_load: bool = True) -> dict:
+    """[condition] -> {"load_N", "pressure_Pa"} (SI), each given in exactly one unit."""
+    if not isinstance(raw, dict):
+        raise ConfigError("condition: must be a table")
+    for key in raw:
+        if key not in CONDITION_SCHEMA:
+            raise ConfigError(f"condition.{key}: unknown field (allowed: {', '.join(CONDITION_SCHEMA)})")
+    out = {}
+    pk = _one_of(raw, ("pressure_psi", "pressure_kPa", "pressure_bar"), "inflation pressure", "condition")
+    out["pressure_Pa"] = CONDITION_SCHEMA[pk].parse(f"condition.{pk}", raw[pk])
+    if need_load:
+        lk = _one_of(raw, ("load_kg", "load_kN", "load_lbs"), "vertical load", "condition")
+        out["load_N"] = CONDITION_SCHEMA[lk].parse(f"condition.{lk}", raw[lk])
+        if out["load_N"] <= 0:
+            raise ConfigError(f"condition.{lk} = {raw[lk]}: must be > 0")
+    return out
+
+
+def parse_solver(raw: dict) -> dict:
+    v = _validate(raw or {}, SOLVER_SCHEMA, "solver.")
+    return {"settle_damping": v["settle_damping_per_s"], "ke_tol": v["ke_tol_J"], "inflate_ramp": v["inflate_ramp_s"],
+            "inflate_max": v["inflate_max_s"], "load_ramp": v["load_ramp_s"], "settle_max": v["settle_max_s"]}
+
+
+def validate_table(raw: dict, schema: dict, name: str) -> dict:
+    """Validate an experiment's own table (e.g. [vertical_stiffness]) against its schema."""
+    return _validate(raw or {}, schema, name + ".")

@@ -1,8 +1,9 @@
 """TireModel: the mesh's reference arrays plus the maps the force terms are built on.
 
-Degrees of freedom are the free nodes x (T, S-2, 3) and the rim's 6 coordinates q; the beads and
+Degrees of freedom are the free nodes x (a V of (T, S-2) planes) and the rim's 6 coordinates q; the beads and
 their ghosts follow the rim (`physics.rim`), which removes the stiffest springs of the model. All
-terms are written as functions of the assembled net X (T, S+2, 3), so their forces on (x, q)
+terms are written as functions of the assembled net X (a V of (T, S+2) planes:
+`physics.geometry_ops`), so their forces on (x, q)
 come from autodiff of one map each (physics notes: forces f = -vjp(g)(sigma)).
 """
 
@@ -13,6 +14,7 @@ import numpy as np
 from .mesh import CROWN, Mesh
 from .materials import MaterialParams
 from .physics import bending, membrane, pressure, rim, tread
+from .physics.geometry_ops import V
 
 
 class TireModel(eqx.Module):
@@ -44,8 +46,8 @@ class TireModel(eqx.Module):
     node_mass: jnp.ndarray  # (T, S-2) free nodes, kg
     rim_mass: jnp.ndarray  # kg, beads included
     rim_inertia: jnp.ndarray  # (3,) kg m^2
-    x_ref: jnp.ndarray  # (T, S-2, 3) free nodes, reference (unloaded mould shape)
-    att_ref: jnp.ndarray  # (T, 4, 3) ghostL, beadL, beadR, ghostR in the rim frame
+    x_ref: V  # (T, S-2) planes: free nodes, reference (unloaded mould shape)
+    att_ref: V  # (T, 4) planes: ghostL, beadL, beadR, ghostR in the rim frame
     s0: jnp.ndarray  # (n_strain,) generalized strains of the reference (stress free)
 
     @property
@@ -83,9 +85,11 @@ class TireModel(eqx.Module):
             np.tile(elem_part, T), np.tile(node_part[1:-1], T), np.tile(elem_part, T),
             np.tile(node_part, T), np.tile(node_part[1:-1], T)])
         # orientation signs: cavity volume positive, tread normals pointing away from the axle
-        Xj = jnp.asarray(X)
+        planes = lambda a: V(*(jnp.asarray(a[..., k]) for k in range(3)))  # noqa: E731
+        Xj = planes(X)
         v = float(pressure.cavity_volume(Xj, 1.0))
-        nrm = np.asarray(tread.outward_normals(Xj, 1.0))[0, S // 2]
+        nrm = tread.outward_normals(Xj, 1.0)[0, S // 2]
+        nrm = np.array([float(nrm.x), float(nrm.y), float(nrm.z)])
         normal_sign = 1.0 if float(np.dot(nrm, real[0, S // 2])) > 0 else -1.0
         att = np.stack([X[:, 0], X[:, 1], X[:, -2], X[:, -1]], axis=1)
         model = TireModel(
@@ -97,7 +101,7 @@ class TireModel(eqx.Module):
             L0_circ=jnp.asarray(L0_circ), quad_area=jnp.asarray(quad_area), w_node=jnp.asarray(mesh.w_circ),
             l_node=jnp.asarray(mesh.l_mer), tread_depth=jnp.asarray(mesh.tread_depth[tread_cols]),
             node_mass=jnp.asarray(mesh.node_mass[:, 1:-1]), rim_mass=jnp.asarray(mesh.rim_mass),
-            rim_inertia=jnp.asarray(mesh.rim_inertia), x_ref=jnp.asarray(free), att_ref=jnp.asarray(att),
+            rim_inertia=jnp.asarray(mesh.rim_inertia), x_ref=planes(free), att_ref=planes(att),
             s0=jnp.zeros(len(strain_part)),
         )
         s0 = model.strains(model.assemble(model.x_ref, jnp.zeros(6)))
@@ -105,9 +109,10 @@ class TireModel(eqx.Module):
 
     # ---- maps -------------------------------------------------------------------------------
     def assemble(self, x, q):
-        """(T, S+2, 3) net: ghost, bead, free nodes, bead, ghost."""
+        """V of (T, S+2) planes: ghost, bead, free nodes, bead, ghost."""
         att = rim.attached_positions(q, self.att_ref)
-        return jnp.concatenate([att[:, :2], x, att[:, 2:]], axis=1)
+        cat = lambda a, b: jnp.concatenate([a[:, :2], b, a[:, 2:]], axis=1)  # noqa: E731
+        return V(cat(att.x, x.x), cat(att.y, x.y), cat(att.z, x.z))
 
     def strains(self, X):
         """Generalized strain vector (n_strain,): lengths (m), shear cosines, hinge angles (rad)."""

@@ -27,6 +27,7 @@ import numpy as np
 from .errors import SimulationError
 from .materials import prony_weights
 from .physics import rim
+from .physics.geometry_ops import V, cross, dot
 from .physics.vector_field import evaluate
 
 V_MAX = 150.0  # m/s: no node of a tire below 100 km/h moves faster; beyond it the run is unstable
@@ -59,7 +60,7 @@ class SymplecticEuler(diffrax.AbstractSolver):
 def kinetic_energy(model, y):
     """Kinetic energy (J) of the free nodes relative to the rim frame, plus the rim's own."""
     v_rel = y.v - rim.frame_velocity(y.q, y.qd, y.x)
-    ke = 0.5 * jnp.sum(model.node_mass[..., None] * v_rel**2)
+    ke = 0.5 * jnp.sum(model.node_mass * dot(v_rel, v_rel))
     M = jnp.concatenate([jnp.full(3, model.rim_mass), model.rim_inertia])
     return ke + 0.5 * jnp.sum(M * y.qd**2)
 
@@ -71,9 +72,9 @@ def observe(model, params, drive, t, y):
     in_contact = d["gap"] < 0
     return dict(
         q=y.q, qd=y.qd,
-        contact_force=F.sum(0),
-        contact_moment=jnp.cross(P - y.q[:3], F).sum(0),
-        n_contact=jnp.sum(in_contact),
+        contact_force=F.sum().array(),
+        contact_moment=cross(P - V(y.q[0], y.q[1], y.q[2]), F).sum().array(),
+        n_contact=jnp.sum(in_contact.astype(float)),
         ke=kinetic_energy(model, y),
         dissipated=y.dissipated,
         settle_work=y.settle_work,
@@ -99,18 +100,20 @@ def max_frequency(model, params, pressure, n_iter: int = 60):
         return 0.5 * jnp.sum(K_inst * d * d) - pressure * model.volume(X)
 
     grad = jax.grad(potential)
-    sqrt_m = jnp.sqrt(model.node_mass)[..., None]
+    sqrt_m = jnp.sqrt(model.node_mass)
 
     def matvec(u):
         return jax.jvp(grad, (model.x_ref,), (u / sqrt_m,))[1] / sqrt_m
 
+    vnorm = lambda u: jnp.sqrt(jnp.sum(dot(u, u)))  # noqa: E731
+
     def body(_, u):
         w = matvec(u)
-        return w / jnp.linalg.norm(w)
+        return w / vnorm(w)
 
-    u0 = jax.random.normal(jax.random.PRNGKey(0), model.x_ref.shape)
-    u = jax.lax.fori_loop(0, n_iter, body, u0 / jnp.linalg.norm(u0))
-    lam = jnp.vdot(u, matvec(u))
+    u0 = V.of(jax.random.normal(jax.random.PRNGKey(0), (3,) + model.node_mass.shape))  # fixed seed: deterministic dt
+    u = jax.lax.fori_loop(0, n_iter, body, u0 / vnorm(u0))
+    lam = jnp.sum(dot(u, matvec(u)))
     k_n, _, _ = model.contact_stiffness(params)
     tread_mass = model.node_mass[:, np.asarray(model.tread_cols) - 1].min()
     lam_c = model.n_sub * k_n.max() / tread_mass
@@ -144,7 +147,7 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
     settle_after = inf to run the whole phase. max_steps is static (it sizes the loop).
     """
     def blow(t, y, args, **kw):
-        speed = jnp.max(jnp.abs(y.v))
+        speed = jnp.max(jnp.maximum(jnp.maximum(jnp.abs(y.v.x), jnp.abs(y.v.y)), jnp.abs(y.v.z)))
         return ~(speed < V_MAX) | ~jnp.all(jnp.isfinite(y.q))
 
     def settled(t, y, args, **kw):
@@ -167,9 +170,9 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
 
 def check_phase(name: str, res: PhaseResult, model, require_settled: bool = True):
     """Host-side verdict on a finished phase: raise SimulationError saying where and when."""
-    if bool(res.blew_up) or not np.all(np.isfinite(np.asarray(res.y.x))):
-        v = np.asarray(res.y.v)
-        speed = np.linalg.norm(np.nan_to_num(v, nan=np.inf), axis=-1)
+    if bool(res.blew_up) or not np.all(np.isfinite(np.asarray(res.y.x.x))):
+        v = np.stack([np.asarray(res.y.v.x), np.asarray(res.y.v.y), np.asarray(res.y.v.z)])
+        speed = np.linalg.norm(np.nan_to_num(v, nan=np.inf), axis=0)
         i, j = np.unravel_index(np.argmax(speed), speed.shape)
         from .mesh import PART_NAMES
 

@@ -11,34 +11,36 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .physics.contact import AbstractSurface
+from .physics.geometry_ops import V
 from .physics.geometry_ops import smooth_step
 
 
 class TireState(eqx.Module):
-    """x, v: (T, S-2, 3) free nodes (m, m/s); q, qd: (6,) rim; maxwell: (B, n_strain) branch
-    stresses; bristle: (N, 3) tread shear deflections (m); dissipated: J in the rubber (Maxwell
+    """x, v: V of (T, S-2) free nodes (m, m/s); q, qd: (6,) rim; maxwell: (B, n_strain) branch
+    stresses; bristle: V of (N,) tread shear deflections (m); dissipated: J in the rubber (Maxwell
     branches and tread), settle_work: J removed by the artificial settling damping."""
 
-    x: Float[Array, "T F 3"]
-    v: Float[Array, "T F 3"]
+    x: V
+    v: V
     q: Float[Array, " 6"]
     qd: Float[Array, " 6"]
     maxwell: Float[Array, "B n"]
-    bristle: Float[Array, "N 3"]
+    bristle: V
     dissipated: Float[Array, ""]
     settle_work: Float[Array, ""]
 
     @staticmethod
     def at_rest(model, n_branches: int):
         z = jnp.zeros(())
-        return TireState(model.x_ref, jnp.zeros_like(model.x_ref), jnp.zeros(6), jnp.zeros(6),
-                         jnp.zeros((n_branches, model.s0.shape[0])), jnp.zeros((model.n_points, 3)), z, z)
+        zp = jnp.zeros(model.n_points)
+        return TireState(model.x_ref, model.x_ref.map(jnp.zeros_like), jnp.zeros(6), jnp.zeros(6),
+                         jnp.zeros((n_branches, model.s0.shape[0])), V(zp, zp, zp), z, z)
 
     def advance(self, upd: "Update", h, drive: "Drive"):
         free = drive.rim_free
         qd = jnp.where(free, self.qd + h * upd.aq, drive.rim_velocity)
-        v = self.v + h * upd.ax
-        return TireState(self.x + h * v, v, self.q + h * qd, qd, upd.maxwell, upd.bristle,
+        v = self.v + upd.ax * h
+        return TireState(self.x + v * h, v, self.q + h * qd, qd, upd.maxwell, upd.bristle,
                          self.dissipated + h * upd.power_rubber, self.settle_work + h * upd.power_settle)
 
 

@@ -85,6 +85,8 @@ class QuadraticSurface:
         sigma2: residual variance (units of f^2); nan when the fit has no residual freedom.
         r2: coefficient of determination on the function values.
         press: sum of squared leave-one-out residuals (units of f^2); inf when undefined.
+        loo_residuals: (n,) leave-one-out residuals f_i - prediction without point i (units
+            of f); inf where undefined (the point fixes its own coefficient).
         n_points: number of points fitted.
     """
 
@@ -96,6 +98,7 @@ class QuadraticSurface:
     sigma2: float
     r2: float
     press: float
+    loo_residuals: np.ndarray
     n_points: int
 
     @property
@@ -227,18 +230,17 @@ def fit_quadratic(
     if g is None:
         # closed-form leave-one-out residuals e_i / (1 - h_ii) (weights cancel for one row)
         h = np.einsum("np,pq,nq->n", phi * sw[:, None], cov, phi * sw[:, None])
-        press = float("inf") if np.any(h > _HAT_ONE) else float(np.sum((resid / (1 - h)) ** 2))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            loo = np.where(h > _HAT_ONE, np.inf, resid / (1 - h))
     else:
         # each point owns d + 1 rows, so leave-one-out means refitting without them
-        press = 0.0
+        loo = np.empty(n)
         for i in range(n):
             keep = owner != i
             ci, _, ri = _solve(a[keep], b[keep])
-            if ri < p:
-                press = float("inf")
-                break
-            press += float((f[i] - phi[i] @ ci) ** 2)
+            loo[i] = f[i] - phi[i] @ ci if ri == p else np.inf
+    press = float(np.sum(loo**2))
     return QuadraticSurface(
         coef=coef, kind=kind, centre=centre, half_width=half, cov_unscaled=cov,
-        sigma2=sigma2, r2=float(r2), press=press, n_points=n,
+        sigma2=sigma2, r2=float(r2), press=press, loo_residuals=loo, n_points=n,
     )

@@ -170,7 +170,8 @@ def test_block_tridiagonal_solve_matches_dense():
     rhs = rng.normal(size=(nb, m))
     x = np.asarray(block_tridiagonal_solve(jnp.asarray(kb), jnp.asarray(rhs)))
     # Same linear system, exact algebra: only rounding differs (condition number ~ 10).
-    np.testing.assert_allclose(x.ravel(), np.linalg.solve(dense, rhs.ravel()), rtol=1e-10, atol=1e-12)
+    expected = np.linalg.solve(dense, rhs.ravel())
+    np.testing.assert_allclose(x.ravel(), expected, rtol=1e-10, atol=1e-12)
 
 
 @pytest.mark.slow

@@ -71,7 +71,7 @@ def inflate(model, params, pressure, dt, proto, max_steps: int, n_save: int = 64
 def first_contact_height(model, y):
     """Road height (m) that just touches the lowest tread point of state y."""
     P = model.tread_points(model.assemble(y.x, y.q))
-    return jnp.min(P[:, 2])
+    return jnp.min(P.z)
 
 
 def load_phase(model, params, pressure, dt, proto, y0, t0, road, force0, force1, rim_free, ramp, max_time,

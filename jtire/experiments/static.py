@@ -54,8 +54,8 @@ def footprint(model, y, z_road, n_fine: int = 24):
     """
     X = model.assemble(y.x, y.q)
     n_tread = len(model.tread_cols_t)
-    p = np.asarray(tread.tread_points(X, model.tread_cols, model.tread_depth, 1, model.normal_sign))
-    p = p.reshape(model.n_theta, n_tread, 3)
+    p = tread.tread_points(X, model.tread_cols, model.tread_depth, 1, model.normal_sign)
+    p = np.stack([np.asarray(p.x), np.asarray(p.y), np.asarray(p.z)], -1).reshape(model.n_theta, n_tread, 3)
     q = np.roll(p, -1, axis=0)
     u = np.linspace(0, 1, n_fine)[:, None, None, None, None]  # circumferential
     v = np.linspace(0, 1, n_fine)[None, :, None, None, None]  # lateral

@@ -18,15 +18,15 @@ def meridional_hinges(X):
     a = X[:, 1:-1] - X[:, :-2]
     b = X[:, 2:] - X[:, 1:-1]
     real = X[:, 1:-1]
-    axis = jnp.roll(real, -1, axis=0) - jnp.roll(real, 1, axis=0)
+    axis = real.roll(-1, 0) - real.roll(1, 0)
     return signed_angle(a, b, axis)
 
 
 def circumferential_hinges(X):
     """(T, S-2) bending angle of the circumferential lines at each free node."""
     free = X[:, 2:-2]
-    a = free - jnp.roll(free, 1, axis=0)
-    b = jnp.roll(free, -1, axis=0) - free
+    a = free - free.roll(1, 0)
+    b = free.roll(-1, 0) - free
     axis = X[:, 3:-1] - X[:, 1:-3]
     return signed_angle(a, b, axis)
 

@@ -19,7 +19,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .geometry_ops import smooth_ramp
+from .geometry_ops import V, dot, smooth_ramp
 
 OMEGA_REF = 2 * jnp.pi * 50.0  # rad/s: tread loss quoted at the footprint-passage band
 RAMP_EPS = 2e-5  # m: width of the smoothed onset of contact (0.02 mm, far below any deflection)
@@ -28,8 +28,8 @@ RAMP_EPS = 2e-5  # m: width of the smoothed onset of contact (0.02 mm, far below
 class AbstractSurface(eqx.Module):
     @abc.abstractmethod
     def query(self, P, t):
-        """P: (N, 3) points. Returns gap (N,) (positive = apart), outward unit normal (N, 3) of
-        the surface, and the surface's material velocity at the closest point (N, 3)."""
+        """P: V of (N,) points. Returns gap (N,) (positive = apart), the surface's outward unit
+        normal (V) and its material velocity at the closest point (V)."""
 
 
 class FlatRoad(AbstractSurface):
@@ -39,9 +39,10 @@ class FlatRoad(AbstractSurface):
     velocity: Float[Array, " 3"]
 
     def query(self, P, t):
-        gap = P[:, 2] - self.height
-        n = jnp.broadcast_to(jnp.array([0.0, 0.0, 1.0]), P.shape)
-        v = jnp.broadcast_to(self.velocity, P.shape)
+        gap = P.z - self.height
+        zero = jnp.zeros_like(gap)
+        n = V(zero, zero, zero + 1.0)
+        v = V(zero + self.velocity[0], zero + self.velocity[1], zero + self.velocity[2])
         return gap, n, v
 
 
@@ -49,18 +50,19 @@ class NoSurface(AbstractSurface):
     """No road at all (rim-locked sidewall experiments): gaps are infinite."""
 
     def query(self, P, t):
-        return jnp.full(P.shape[:1], 1e3), jnp.zeros_like(P) + jnp.array([0.0, 0.0, 1.0]), jnp.zeros_like(P)
+        zero = jnp.zeros_like(P.z)
+        return zero + 1e3, V(zero, zero, zero + 1.0), V(zero, zero, zero)
 
 
 def contact_forces(surface, P, Pdot, t, bristle, k_n, k_t, c_n, mu, dt):
     """Forces on the contact points and the updated bristle state.
 
-    Returns F (N, 3), bristle_new (N, 3), F_n (N,) normal force magnitudes, gap (N,), and the power
-    dissipated by normal damping (W).
+    P, Pdot, bristle: V of (N,). Returns F (V), bristle_new (V), F_n (N,) normal force
+    magnitudes, gap (N,), and the power dissipated by normal damping (W).
     """
     gap, n, v_s = surface.query(P, t)
     rel = Pdot - v_s
-    gap_rate = jnp.sum(rel * n, -1)
+    gap_rate = dot(rel, n)
     pen = -gap
     in_contact = pen > 0
     fn_el = k_n * smooth_ramp(pen, RAMP_EPS)
@@ -68,12 +70,12 @@ def contact_forces(surface, P, Pdot, t, bristle, k_n, k_t, c_n, mu, dt):
     F_n = jnp.maximum(fn_el + fn_damp, 0.0)
     p_damp = jnp.sum(jnp.where(in_contact & (fn_el + fn_damp > 0), c_n * gap_rate**2, 0.0))
     # bristle: tangential slip, return mapping onto the friction cone
-    v_t = rel - gap_rate[:, None] * n
+    v_t = rel - gap_rate * n
     z_trial = bristle + v_t * dt
-    z_trial = z_trial - jnp.sum(z_trial * n, -1)[:, None] * n
-    zmag = jnp.sqrt(jnp.sum(z_trial**2, -1) + 1e-30)
+    z_trial = z_trial - dot(z_trial, n) * n
+    zmag = jnp.sqrt(dot(z_trial, z_trial) + 1e-30)
     limit = mu * F_n
     scale = jnp.minimum(1.0, limit / (k_t * zmag + 1e-30))
-    z_new = z_trial * scale[:, None]
-    F = F_n[:, None] * n - k_t[:, None] * z_new
+    z_new = z_trial * scale
+    F = F_n * n - k_t * z_new
     return F, z_new, F_n, gap, p_damp

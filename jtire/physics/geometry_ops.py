@@ -1,14 +1,81 @@
-"""Small vectorized geometric helpers shared by the force terms."""
+"""Vectors as three component planes, and the geometric helpers the force terms share.
 
+A `V` holds x, y, z as separate arrays of equal shape; slicing `V[...]` slices every component.
+XLA on a CPU fuses plane-wise arithmetic on 2-D arrays into single loops. Measured on this
+machine for the cavity-volume gradient of the default mesh: components-last (T, S, 3) 215 us,
+components-first (3, T, S) 520 us, three (T, S) planes 45 us. So the physics is written on planes.
+"""
+
+import jax
 import jax.numpy as jnp
 
 
-def norm(v, axis=-1):
-    return jnp.sqrt(jnp.sum(v * v, axis=axis))
+@jax.tree_util.register_pytree_node_class
+class V:
+    __slots__ = ("x", "y", "z")
+
+    def __init__(self, x, y, z):
+        self.x, self.y, self.z = x, y, z
+
+    @staticmethod
+    def of(a):
+        """From an array with the components on its first axis."""
+        return V(a[0], a[1], a[2])
+
+    def array(self):
+        return jnp.stack([self.x, self.y, self.z])
+
+    def tree_flatten(self):
+        return (self.x, self.y, self.z), None
+
+    @classmethod
+    def tree_unflatten(cls, aux, children):
+        return cls(*children)
+
+    def __getitem__(self, idx):
+        return V(self.x[idx], self.y[idx], self.z[idx])
+
+    def __add__(self, o):
+        return V(self.x + o.x, self.y + o.y, self.z + o.z) if isinstance(o, V) else V(self.x + o, self.y + o, self.z + o)
+
+    def __sub__(self, o):
+        return V(self.x - o.x, self.y - o.y, self.z - o.z) if isinstance(o, V) else V(self.x - o, self.y - o, self.z - o)
+
+    def __neg__(self):
+        return V(-self.x, -self.y, -self.z)
+
+    def __mul__(self, s):
+        return V(self.x * s, self.y * s, self.z * s)
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, s):
+        return V(self.x / s, self.y / s, self.z / s)
+
+    def roll(self, shift, axis):
+        return V(jnp.roll(self.x, shift, axis), jnp.roll(self.y, shift, axis), jnp.roll(self.z, shift, axis))
+
+    def sum(self, axis=None):
+        return V(self.x.sum(axis), self.y.sum(axis), self.z.sum(axis))
+
+    def map(self, f):
+        return V(f(self.x), f(self.y), f(self.z))
 
 
-def unit(v, axis=-1):
-    return v / norm(v, axis)[..., None]
+def dot(a, b):
+    return a.x * b.x + a.y * b.y + a.z * b.z
+
+
+def cross(a, b):
+    return V(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x)
+
+
+def norm(a):
+    return jnp.sqrt(dot(a, a))
+
+
+def unit(a):
+    return a * (1.0 / norm(a))
 
 
 def signed_angle(a, b, axis):
@@ -16,7 +83,7 @@ def signed_angle(a, b, axis):
 
     atan2 stays regular where the shell goes flat (acos is singular there: physics notes).
     """
-    return jnp.arctan2(jnp.sum(jnp.cross(a, b) * unit(axis), -1), jnp.sum(a * b, -1))
+    return jnp.arctan2(dot(cross(a, b), unit(axis)), dot(a, b))
 
 
 def smooth_ramp(x, eps):

@@ -1,6 +1,6 @@
 """Membrane action of the cord-reinforced layers: edge stretch and in-plane shear.
 
-Generalized strains of the quadrilateral net (X: (T, S+2, 3), columns 0 and S+1 are the
+Generalized strains of the quadrilateral net (X: a `V` of (T, S+2) planes, columns 0 and S+1 are the
 rim-attached ghosts, 1 and S the beads):
   meridional edge lengths     (T, S-1)  carcass cords (radial) / belt transverse
   circumferential edge lengths (T, S-2)  rubber in the sidewall, steel belt in the crown
@@ -12,7 +12,7 @@ along the two families of edges (`MaterialParams.E_meridional`, `.E_circumferent
 
 import jax.numpy as jnp
 
-from .geometry_ops import norm, unit
+from .geometry_ops import dot, norm, unit
 
 
 def meridional_lengths(X):
@@ -24,16 +24,16 @@ def meridional_lengths(X):
 def circumferential_lengths(X):
     """(T, S-2) lengths of the edges between segment i and i+1 at each free column."""
     free = X[:, 2:-2]
-    return norm(jnp.roll(free, -1, axis=0) - free)
+    return norm(free.roll(-1, 0) - free)
 
 
 def shear_strains(X):
     """(T, S-1) cos of the angle between the quad's mean meridional and circumferential edges."""
     real = X[:, 1:-1]
-    nxt = jnp.roll(real, -1, axis=0)
+    nxt = real.roll(-1, 0)
     m = (real[:, 1:] - real[:, :-1]) + (nxt[:, 1:] - nxt[:, :-1])
     c = (nxt[:, :-1] - real[:, :-1]) + (nxt[:, 1:] - real[:, 1:])
-    return jnp.sum(unit(m) * unit(c), -1)
+    return dot(unit(m), unit(c))
 
 
 def membrane_stiffness(mesh_arrays, params):

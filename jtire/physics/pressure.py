@@ -9,20 +9,20 @@ The pressure acts on the mid-surface (the inner liner lies ~t/2 inside it; the d
 loaded area is under 3 % and is absorbed by calibration).
 """
 
-import jax.numpy as jnp
+from .geometry_ops import cross, dot
 
 
 def _quad_volume(a, b, c, d):
-    m = 0.25 * (a + b + c + d)
-    tri = lambda p, q: jnp.sum(p * jnp.cross(q, m), -1)  # noqa: E731  6 x signed tetra volume
+    m = (a + b + c + d) * 0.25
+    tri = lambda p, q: dot(p, cross(q, m))  # noqa: E731  6 x signed tetra volume
     return (tri(a, b) + tri(b, c) + tri(c, d) + tri(d, a)) / 6.0
 
 
 def cavity_volume(X, sign):
-    """Enclosed volume (m^3) of the tire + rim closure. X: (T, S+2, 3); sign fixes orientation."""
+    """Enclosed volume (m^3) of the tire + rim closure. X: V of (T, S+2); sign fixes orientation."""
     real = X[:, 1:-1]
-    nxt = jnp.roll(real, -1, axis=0)
+    nxt = real.roll(-1, 0)
     v_tire = _quad_volume(real[:, :-1], real[:, 1:], nxt[:, 1:], nxt[:, :-1]).sum()
     bl, br = real[:, 0], real[:, -1]
-    v_close = _quad_volume(br, bl, jnp.roll(bl, -1, axis=0), jnp.roll(br, -1, axis=0)).sum()
+    v_close = _quad_volume(br, bl, bl.roll(-1, 0), br.roll(-1, 0)).sum()
     return sign * (v_tire + v_close)

@@ -10,6 +10,8 @@ done by autodiff, so no rim force is derived by hand.
 
 import jax.numpy as jnp
 
+from .geometry_ops import V, cross
+
 
 def rotation(q):
     cx, sx = jnp.cos(q[3]), jnp.sin(q[3])
@@ -23,11 +25,13 @@ def rotation(q):
 
 
 def attached_positions(q, X_ref):
-    """World positions of rim-attached points. X_ref: (..., 3) in the rim frame."""
-    return q[:3] + X_ref @ rotation(q).T
+    """World positions (V) of rim-attached points X_ref (V, rim frame)."""
+    R = rotation(q)
+    return V(*(q[k] + R[k, 0] * X_ref.x + R[k, 1] * X_ref.y + R[k, 2] * X_ref.z for k in range(3)))
 
 
 def frame_velocity(q, qd, X):
-    """Velocity of the rim frame at world points X (small out-of-plane rotations)."""
-    omega = jnp.stack([qd[3], qd[4], qd[5]])
-    return qd[:3] + jnp.cross(omega, X - q[:3])
+    """Velocity (V) of the rim frame at world points X (V) (small out-of-plane rotations)."""
+    r = V(X.x - q[0], X.y - q[1], X.z - q[2])
+    w = V(qd[3], qd[4], qd[5])
+    return cross(w, r) + V(qd[0], qd[1], qd[2])

@@ -11,28 +11,28 @@ tread's own, physical and calibratable, not a numerical constant.
 
 import jax.numpy as jnp
 
-from .geometry_ops import unit
+from .geometry_ops import cross, unit
 
 
 def outward_normals(X, sign):
-    """(T, S, 3) unit normals at real nodes. `sign` (+1/-1) orients them away from the axle."""
+    """V of (T, S) unit normals at real nodes. `sign` (+1/-1) orients them away from the axle."""
     real = X[:, 1:-1]
-    t_c = jnp.roll(real, -1, axis=0) - jnp.roll(real, 1, axis=0)
+    t_c = real.roll(-1, 0) - real.roll(1, 0)
     t_m = X[:, 2:] - X[:, :-2]
-    return sign * unit(jnp.cross(t_c, t_m))
+    return unit(cross(t_c, t_m)) * sign
 
 
 def tread_points(X, tread_cols, depth, n_sub, sign):
-    """Contact points (N, 3), N = T * n_tread * n_sub, ordered (segment, sub-point, tread column).
+    """Contact points, a V of (N,), N = T * n_sub * n_tread, ordered (segment, sub-point, column).
 
     tread_cols: (n_tread,) real-node column indices; depth: (n_tread,) m.
     """
     n = outward_normals(X, sign)[:, tread_cols]
-    p = X[:, 1:-1][:, tread_cols] + depth[None, :, None] * n  # (T, n_tread, 3)
-    p_next = jnp.roll(p, -1, axis=0)
-    w = jnp.arange(n_sub) / n_sub
-    pts = (1 - w)[None, :, None, None] * p[:, None] + w[None, :, None, None] * p_next[:, None]
-    return pts.reshape(-1, 3)
+    p = X[:, 1:-1][:, tread_cols] + n * depth  # (T, n_tread) planes
+    p_next = p.roll(-1, 0)
+    w = (jnp.arange(n_sub) / n_sub)[:, None]
+    pts = p[:, None] * (1 - w) + p_next[:, None] * w  # (T, n_sub, n_tread)
+    return pts.map(lambda a: a.reshape(-1))
 
 
 def tread_stiffness(mesh_arrays, params, n_sub):

@@ -12,6 +12,7 @@ import jax.numpy as jnp
 from ..materials import prony_weights
 from ..state import Update
 from . import rim
+from .geometry_ops import V, cross, dot
 from .contact import OMEGA_REF, contact_forces
 
 
@@ -28,7 +29,7 @@ def evaluate(model, params, drive, t, y):
         X = model.assemble(*Y_)
         return model.strains(X), model.volume(X), model.tread_points(X)
 
-    (s, V, P), lin = jax.linearize(kinematics, Y)
+    (s, vol, P), lin = jax.linearize(kinematics, Y)
     sdot, _, Pdot = lin(Yd)
     K = model.stiffness(params)
     # Maxwell branches, integrated exactly for a constant strain rate over the step. They are
@@ -55,21 +56,22 @@ def evaluate(model, params, drive, t, y):
     # takes the reaction; needed whenever the rim moves or spins) or to the ground (alpha = 0:
     # a slowly loaded, non-rolling tire, where damping relative to a descending rim would
     # resist the deflection itself and bias a quasi-static load-deflection curve)
-    m = model.node_mass[..., None]
+    m = model.node_mass
     alpha = drive.damp_rim_frame
-    v_rel = y.v - alpha * rim.frame_velocity(y.q, y.qd, y.x)
-    f_d = -drive.settle_damping * m * v_rel
-    r = (y.x - y.q[:3]).reshape(-1, 3)
-    fdf = alpha * f_d.reshape(-1, 3)
-    fq = fq + jnp.concatenate([-fdf.sum(0), -jnp.cross(r, fdf).sum(0)])
+    v_rel = y.v - rim.frame_velocity(y.q, y.qd, y.x) * alpha
+    f_d = v_rel * (-drive.settle_damping * m)
+    r = y.x - V(y.q[0], y.q[1], y.q[2])
+    fdf = f_d * alpha
+    fq = fq - jnp.concatenate([fdf.sum().array(), cross(r, fdf).sum().array()])
     fx = fx + f_d
-    p_settle = -jnp.sum(f_d * v_rel)
+    p_settle = -jnp.sum(dot(f_d, v_rel))
 
     M_rim = jnp.concatenate([jnp.full(3, model.rim_mass), model.rim_inertia])
     g6 = jnp.concatenate([drive.gravity * model.rim_mass, jnp.zeros(3)])
-    ax = fx / m + drive.gravity
+    g = drive.gravity
+    ax = fx / m + V(g[0], g[1], g[2])
     aq = (fq + drive.rim_force(t) + g6) / M_rim
 
     upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle)
-    diag = dict(P=P, F=F, F_n=F_n, gap=gap, pressure=p, volume=V)
+    diag = dict(P=P, F=F, F_n=F_n, gap=gap, pressure=p, volume=vol)
     return upd, diag
