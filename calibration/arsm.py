@@ -9,12 +9,15 @@ The loop (Wang, Dong & Aitchison 2001, with the inherited designs of Wang 2003):
    cost no calls). The richest basis the points determine is used.
 3. Move the region: ARSM keeps the bounding box of the part of the region where the surface is
    at or below the second-best value seen; SRSM (Stander & Craig 2002) pans and zooms around the
-   best point. Both keep the best point inside and a minimum width.
+   best point. Safeguards (region.py): the best point stays inside; a width never drops below
+   `min_width` nor below `min_shrink` times its old value in one step; after a proposal that
+   failed to improve, the region zooms on the best point (the data are trusted over the
+   surface); when the best point sits on an inner face, the region pans across it and grows.
 4. Evaluate ONE new point: the surface's minimizer in the region, or a space-filling point when
-   that minimizer repeats a point already evaluated (the surface has nothing new to say there).
-5. Stop on the budget, on the region reaching its minimum width, or when the surface predicts
-   the value at its minimizer to within `tol` times the initial spread of values (the surface
-   agrees with the truth where it matters).
+   that minimizer repeats a point already evaluated (the surface has nothing new to say there)
+   or, optionally, when the region holds fewer than `n_fill` points.
+5. Stop on the budget, on the region reaching its minimum width, or when surface and truth
+   agree (`_agrees`: at the new interior minimizer, and leave-one-out at the fitted points).
 
 Variables keep their physical units outside; inside, everything is in unit coordinates of
 [lower, upper], so the method treats a density in kg/m^3 and a modulus in Pa alike.
@@ -67,61 +70,35 @@ def _fit_set(u, f, region, n_want):
     return np.array(sorted(idx), dtype=int)
 
 
-def _on_inner_face(u, region, rel=1e-2):
-    """u sits on a face of the region that is not a face of the unit box (the optimum may lie
-    beyond it, so agreement of surface and truth there does not mean convergence)."""
-    lo = (u - region.lower <= rel * region.width) & (region.lower > 0)
-    hi = (region.upper - u <= rel * region.width) & (region.upper < 1)
-    return bool(np.any(lo | hi))
+def _on_face(u, region, rel=1e-2):
+    """u lies within rel region widths of a face of the region."""
+    return bool(np.any((u - region.lower <= rel * region.width)
+                       | (region.upper - u <= rel * region.width)))
 
 
-import os
-_W = os.environ.get("ARSM_W", "none")
-
-
-def _weights(fi):
-    if _W == "none":
-        return None
-    lo = fi.min()
-    s = np.median(fi) - lo
-    if s <= 0:
-        return None
-    r = (fi - lo) / s
-    if _W == "inv":
-        return 1.0 / (1.0 + r)
-    if _W == "inv2":
-        return 1.0 / (1.0 + r) ** 2
-    if _W == "exp":
-        return np.exp(-r)
-
-
-_T = os.environ.get("ARSM_T", "none")
-_Z = os.environ.get("ARSM_Z", "1") == "1"
-
-
-def _agrees(surf, u, f, region, x_new, pred, f_new, tol):
-    """Surface and truth agree: at the new point to tol, and at every fitted point inside the
-    region (leave-one-out, where defined) to sqrt(tol), both relative to the spread of the values inside the
-    region; and the new point is not on a face the region could still pan across."""
-    inside = surf.idx[inherit(u[surf.idx], region)]
-    if inside.size == 0 or _on_inner_face(x_new, region):
+def _agrees(surf, idx, u, f, region, x_new, pred, f_new, tol):
+    """Surface and truth agree. The fit must be local: the points inside the region alone
+    determine it (at least as many as the surface has terms). It must predict the new point to
+    tol and those inside points (leave-one-out, where defined, at least one) to sqrt(tol), both
+    relative to the spread of the values inside the region. And the new point must lie inside
+    the region, not on a face: a constrained minimum of the surface says nothing about
+    convergence."""
+    mine = inherit(u[idx], region)
+    if mine.sum() < surf.coef.size or _on_face(x_new, region):
         return False
-    spread = float(np.ptp(np.append(f[inside], f_new)))
-    loo = surf.loo_residuals[np.isin(surf.idx, inside)]
-    loo = loo[np.isfinite(loo)]  # an interpolated point has no leave-one-out residual
-    return bool(abs(pred - f_new) <= tol * spread and np.all(np.abs(loo) <= np.sqrt(tol) * spread))
+    spread = float(np.ptp(np.append(f[idx[mine]], f_new)))
+    loo = surf.loo_residuals[mine]
+    loo = loo[np.isfinite(loo)]
+    return bool(loo.size > 0 and abs(pred - f_new) <= tol * spread
+                and np.all(np.abs(loo) <= np.sqrt(tol) * spread))
 
 
 def _fit(u, f, region, n_want):
-    if _T == "square":
-        f = f**2
+    """(surface, indices of the fitted points), or None when too few finite values remain."""
     idx = _fit_set(u, f, region, n_want)
     if idx.size < u.shape[1] + 1:
-        return None  # too many failed calls to fit even a plane
-    s = fit_quadratic(u[idx], f[idx], region.lower, region.upper, weights=_weights(f[idx]))
-    object.__setattr__(s, "idx", idx)
-    object.__setattr__(s, "spread", float(np.ptp(f[idx])))
-    return s
+        return None
+    return fit_quadratic(u[idx], f[idx], region.lower, region.upper), idx
 
 
 def minimize(
@@ -133,11 +110,12 @@ def minimize(
     history_path=None,
     n_initial: int | None = None,
     min_width: float = 1e-4,
-    tol: float = 1e-6,
+    tol: float = 1e-3,
     region_rule: str = "arsm",
     min_shrink: float = 0.5,
+    pan_growth: float = 2.0,
+    n_fill: int = 0,
     f_target: float | None = None,
-    n_fill: int | None = None,
 ) -> OptimizeResult:
     """Minimize fun over the box [lower, upper] with at most `budget` calls.
 
@@ -149,16 +127,19 @@ def minimize(
         seed: seeds the initial design and the dense samples; same seed, same run.
         history_path: JSON-lines file; appended per call, replayed on resume.
         n_initial: size of the initial Latin hypercube (default 2d + 1).
-        min_width: smallest region width, unit coordinates; the run stops when every width
-            has reached it.
-        tol: stop when |surface prediction - value| at the surface minimizer is at most
-            tol * (spread of the initial values) and the fit's leave-one-out RMS error at most
-            sqrt(tol) times that spread (agreement of surface and truth); 0 disables.
+        min_width: smallest region width, unit coordinates; the run stops ("region") when
+            every width has reached it.
+        tol: agreement stop: the surface predicts the value at its (interior) minimizer to
+            tol, and its leave-one-out residuals inside the region to sqrt(tol), both relative
+            to the spread of the values inside the region; 0 disables.
         region_rule: "arsm" (Wang et al. 2001) or "srsm" (Stander & Craig 2002).
-        min_shrink: ARSM safeguard, the smallest factor one update may scale a width by.
-        f_target: stop as soon as a value <= f_target is found (None: never).
-        n_fill: when the region holds fewer points than this, an iteration first evaluates one
-            space-filling point in it (default 2d + 1; 0 never fills).
+        min_shrink: ARSM: the smallest factor one update may scale a width by; also the zoom
+            factor after a proposal that failed to improve.
+        pan_growth: ARSM: width factor when the region pans across a face (see region.py).
+        n_fill: when the region holds fewer finite points than this, an iteration first
+            evaluates one space-filling point in it (0: only when the surface proposes a
+            point already evaluated).
+        f_target: stop ("target") as soon as a value <= f_target is found (None: never).
     Returns:
         OptimizeResult; stop_reason is "budget", "region", "agreement" or "target".
     """
@@ -171,13 +152,12 @@ def minimize(
     n0 = 2 * d + 1 if n_initial is None else int(n_initial)
     if not d + 1 <= n0 <= int(budget):
         raise ConfigError(f"n_initial = {n0}: must be in [{d + 1}, budget = {budget}] (d = {d})")
-    method = "arsm" if region_rule == "arsm" else "srsm"
-    ev = Evaluator(fun, lower, upper, method, seed, budget, history_path)
-    # Fit on the full quadratic once the budget can afford its points, else on the reduced one.
+    if not pan_growth >= 1.0:
+        raise ConfigError(f"pan_growth = {pan_growth}: must be >= 1")
+    ev = Evaluator(fun, lower, upper, region_rule, seed, budget, history_path)
+    # Fit the full quadratic once the budget can afford its points, else the reduced one.
     p_full = n_terms(d, "full")
     n_want = p_full + 1 if p_full + 1 <= budget // 2 else n_terms(d, "reduced")
-    n_local = n_terms(d, "reduced") if n_fill is None else int(n_fill)
-
     u_list, f_list = [], []
 
     def evaluate(u, **extras):
@@ -190,54 +170,50 @@ def minimize(
 
     def fill(region, it):
         x = maximin_fill(1, np.array(u_list), region.lower, region.upper, _sub_seed(seed, it, 3))
-        return evaluate(x[0], phase="fill", region=[region.lower.tolist(), region.upper.tolist()])
+        evaluate(x[0], phase="fill", region=[region.lower.tolist(), region.upper.tolist()])
+
+    def data():
+        f = np.array(f_list, dtype=float)
+        return np.array(u_list), f, int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
 
     region = Region.unit(d)
+    failed = False  # did the last proposal fail to improve on the best point?
     try:
         for u in latin_hypercube(n0, d, seed, optimization="random-cd"):
             evaluate(u, phase="initial")
-        ok = np.isfinite(f_list)
-        f_scale = float(np.ptp(np.asarray(f_list)[ok])) if ok.sum() > 1 else 0.0
-        it = 0
-        failed = False
-        while True:
-            u, f = np.array(u_list), np.array(f_list, dtype=float)
-            best = int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
-            surf = _fit(u, f, region, n_want)
-            if region_rule == "arsm" and surf is not None:
-                region = arsm_update(region, surf, second_best(f**2 if _T == 'square' else f), u[best],
-                                     _sub_seed(seed, it, 1), min_width, min_shrink, zoom=failed and _Z)
-            # A local fit needs local points: when the region holds fewer than a reduced
-            # quadratic's worth, spend one call on a space-filling point inside it first.
-            if np.sum(inherit(u, region) & np.isfinite(f)) < n_local:
+        for it in range(10 * int(budget)):  # each pass evaluates at least one point
+            u, f, best = data()
+            fit = _fit(u, f, region, n_want)
+            if region_rule == "arsm" and fit is not None:
+                region = arsm_update(region, fit[0], second_best(f), u[best],
+                                     _sub_seed(seed, it, 1), min_width, min_shrink,
+                                     zoom=failed, pan_growth=pan_growth)
+            if np.sum(inherit(u, region) & np.isfinite(f)) < n_fill:
                 fill(region, it)
-                u, f = np.array(u_list), np.array(f_list, dtype=float)
-            surf = _fit(u, f, region, n_want)
-            if surf is None:  # failed calls left too few points for even a plane
+                u, f, best = data()
+            fit = _fit(u, f, region, n_want)
+            if fit is None:  # failed calls left too few points for even a plane
                 fill(region, it)
             else:
-                best = int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
+                surf, idx = fit
                 x_new, pred = surf.argmin(region.lower, region.upper, _sub_seed(seed, it, 2),
                                           starts=u[best])
                 if np.min(np.max(np.abs(u - x_new) / region.width, axis=1)) < _MIN_SEPARATION:
                     fill(region, it)  # the surface points at a known point: explore instead
+                    failed = True
                 else:
-                    f_best = float(np.min(np.where(np.isfinite(f), f, np.inf)))
                     f_new = evaluate(x_new, phase="minimizer", pred=pred, kind=surf.kind,
                                      region=[region.lower.tolist(), region.upper.tolist()])
-                    failed = not (f_new < f_best)
-                    # agreement: at the minimizer to tol, over the fitted points (leave-one-out)
-                    # to sqrt(tol), and not on a face the region could still pan across
-                    if tol > 0 and np.isfinite(f_new) and _agrees(surf, u, f, region, x_new,
-                                                                  pred, f_new, tol):
+                    failed = not f_new < f[best]
+                    if tol > 0 and np.isfinite(f_new) and _agrees(surf, idx, u, f, region,
+                                                                  x_new, pred, f_new, tol):
                         raise _Stop("agreement")
             if region_rule == "srsm":
-                f = np.array(f_list, dtype=float)
-                best = int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
-                region = srsm_update(region, u_list[best], min_width=min_width)
+                u, f, best = data()
+                region = srsm_update(region, u[best], min_width=min_width)
             if np.all(region.width <= min_width * (1 + 1e-9)):
                 raise _Stop("region")
-            it += 1
+        reason = "budget"
     except BudgetExhausted:
         reason = "budget"
     except _Stop as s:

@@ -49,6 +49,7 @@ class TireModel(eqx.Module):
     x_ref: V  # (T, S-2) planes: free nodes, reference (unloaded mould shape)
     att_ref: V  # (T, 4) planes: ghostL, beadL, beadR, ghostR in the rim frame
     s0: jnp.ndarray  # (n_strain,) generalized strains of the reference (stress free)
+    belt_mask: jnp.ndarray  # (T, S-2) 1 on the free nodes of the belt (crown part)
 
     @property
     def elem_part(self):
@@ -103,6 +104,7 @@ class TireModel(eqx.Module):
             node_mass=jnp.asarray(mesh.node_mass[:, 1:-1]), rim_mass=jnp.asarray(mesh.rim_mass),
             rim_inertia=jnp.asarray(mesh.rim_inertia), x_ref=planes(free), att_ref=planes(att),
             s0=jnp.zeros(len(strain_part)),
+            belt_mask=jnp.asarray(np.broadcast_to(mesh.belt_mask[1:-1].astype(float), free.shape[:2]).copy()),
         )
         s0 = model.strains(model.assemble(model.x_ref, jnp.zeros(6)))
         return eqx.tree_at(lambda m: m.s0, model, s0)

@@ -28,8 +28,10 @@ from .errors import SimulationError
 from .materials import prony_weights
 from .physics import rim
 from .physics.geometry_ops import V, cross, dot
+from .physics.rigid_belt import belt_motion
 from .physics.vector_field import evaluate
 
+MAX_STEPS = 2**21  # a bound on steps per phase (~40 s of simulated time at the default step)
 V_MAX = 150.0  # m/s: no node of a tire below 100 km/h moves faster; beyond it the run is unstable
 SAFETY = 0.8
 
@@ -69,6 +71,7 @@ def observe(model, params, drive, t, y):
     """Reduced outputs saved along a run (a few dozen numbers, never the full state)."""
     upd, d = evaluate(model, params, drive, t, y)
     F, P = d["F"], d["P"]
+    belt = belt_motion(y.x, model.x_ref, model.node_mass, model.belt_mask)
     in_contact = d["gap"] < 0
     return dict(
         q=y.q, qd=y.qd,
@@ -80,7 +83,9 @@ def observe(model, params, drive, t, y):
         settle_work=y.settle_work,
         pressure=d["pressure"],
         rim_force=drive.rim_force(t),
-        volume=model.volume(model.assemble(y.x, y.q)),
+        volume=d["volume"],
+        belt_disp=belt[0],
+        belt_rot=belt[1],
     )
 
 
@@ -144,7 +149,10 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
     """Integrate one phase from t0 to at most t1 (traced scalars); save `observe` at ts.
 
     Stops early when settled (t >= settle_after and KE < ke_tol) or unstable. Pass
-    settle_after = inf to run the whole phase. max_steps is static (it sizes the loop).
+    settle_after = inf to run the whole phase. max_steps is static; with the forward-mode adjoint
+    it is only a bound (nothing is allocated per step), so every phase uses MAX_STEPS and shares
+    one compiled program. Derivatives are forward mode (jax.jvp / jacfwd over a few parameters,
+    physics notes: 2.9x a forward run for two parameters).
     """
     def blow(t, y, args, **kw):
         speed = jnp.max(jnp.maximum(jnp.maximum(jnp.abs(y.v.x), jnp.abs(y.v.y)), jnp.abs(y.v.z)))
@@ -160,12 +168,19 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
         term, SymplecticEuler(), t0, t1, drive.dt, y0, args=(model, params, drive), saveat=saveat,
         stepsize_controller=diffrax.ConstantStepSize(), max_steps=max_steps,
         event=diffrax.Event([blow, settled]), throw=False,
-        adjoint=diffrax.RecursiveCheckpointAdjoint(checkpoints=None),
+        adjoint=diffrax.ForwardMode(),
     )
     y_end = jax.tree_util.tree_map(lambda a: a[0], sol.ys[0])
     mask = sol.event_mask if sol.event_mask is not None else [jnp.array(False), jnp.array(False)]
     return PhaseResult(y=y_end, t_end=sol.ts[0][0], saved=sol.ys[1], settled=mask[1], blew_up=mask[0],
                        n_steps=sol.stats["num_steps"])
+
+
+# One compiled program per (model, surface type, loop size, drive options), shared by every phase
+# and experiment that has them: a phase is the unit of compilation (compiling whole experiments
+# cost ~30 s each on this machine; phases are reused across all of them).
+run_phase_jit = eqx.filter_jit(run_phase)
+N_SAVE = 201  # saved samples per phase (static: one size for every phase, so one compilation)
 
 
 def check_phase(name: str, res: PhaseResult, model, require_settled: bool = True):

@@ -62,6 +62,8 @@ class Drive(eqx.Module):
     [t_ramp0, t_ramp1]; rim DOFs with rim_free = 0 follow rim_velocity (0 = locked).
     settle_damping (1/s): mass-proportional damping for dynamic relaxation, on velocities
     relative to the rim frame (damp_rim_frame = 1) or to the ground (0); 0 in dynamic experiments.
+    rigid_belt (static): the crown nodes move as one rigid body (`physics.rigid_belt`).
+    belt_load0/1: optional (6,) force + moment on the belt (None: no belt load, nothing computed).
     """
 
     pressure0: Float[Array, ""]
@@ -77,6 +79,17 @@ class Drive(eqx.Module):
     damp_rim_frame: Float[Array, ""]
     gravity: Float[Array, " 3"]
     dt: Float[Array, ""]
+    belt_load0: Float[Array, " 6"] = None
+    belt_load1: Float[Array, " 6"] = None
+    rigid_belt: bool = eqx.field(static=True, default=False)
+
+    @property
+    def belt_loaded(self) -> bool:
+        return self.belt_load1 is not None
+
+    def belt_load(self, t):
+        """(6,) force and moment (about the belt's mass centre) on the belt, ramped like the rim force."""
+        return self.belt_load0 + (self.belt_load1 - self.belt_load0) * self.ramp(t)
 
     def ramp(self, t):
         return smooth_step((t - self.t_ramp0) / jnp.maximum(self.t_ramp1 - self.t_ramp0, 1e-12))

@@ -23,8 +23,6 @@ import numpy as np
 from jtire.errors import ConfigError
 from surrogates.doe import sobol
 
-import os
-_GROW = float(os.environ.get("ARSM_GROW", "1"))
 __all__ = ["Region", "second_best", "inherit", "arsm_update", "srsm_update", "safeguard"]
 
 
@@ -121,6 +119,7 @@ def arsm_update(
     glo=None,
     ghi=None,
     zoom: bool = False,
+    pan_growth: float = 2.0,
 ) -> Region:
     """ARSM region: bounding box of {x in region : surface(x) <= threshold}, safeguarded.
 
@@ -135,6 +134,7 @@ def arsm_update(
     zoom: the surface's last proposal failed to improve on the best point, so its sub-level
     set is not to be trusted: no width may then exceed min_shrink times its old value, and the
     capped axes are centred on best_x (the data are trusted over the surface).
+    pan_growth: width factor of a pan (>= 1).
     """
     _check(min_width, min_shrink)
     best_x = np.asarray(best_x, dtype=float)
@@ -155,7 +155,7 @@ def arsm_update(
         wide = (hi - lo) > cap
         lo, hi = np.where(wide, zlo, lo), np.where(wide, zhi, hi)
     lo, hi = safeguard(lo, hi, best_x, region, min_width, min_shrink, region.lower, region.upper)
-    plo, phi, _ = _pan_from_faces(lo, hi, best_x, region, glo, ghi, _GROW)
+    plo, phi, _ = _pan_from_faces(lo, hi, best_x, region, glo, ghi, pan_growth)
     return Region(plo, phi, None)
 
 

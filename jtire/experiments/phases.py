@@ -40,32 +40,44 @@ class Protocol(eqx.Module):
 
 
 def steps_for(duration: float, dt: float) -> int:
-    """Static loop size for a phase, rounded up to a multiple of 2048 so small changes of dt
-    (another pressure, calibrated moduli) reuse the same compiled program."""
+    """Static loop bound for a phase: the shared solve.MAX_STEPS (one compiled program for all
+    phases); a phase that would need more is refused here rather than cut short."""
     n = int(np.ceil(duration / dt)) + 16
-    return int(2048 * np.ceil(n / 2048))
+    if n > solve.MAX_STEPS:
+        from ..errors import ConfigError
+
+        raise ConfigError(f"phase of {duration:g} s needs {n} steps of {dt:.3g} s: more than the {solve.MAX_STEPS} allowed")
+    return solve.MAX_STEPS
 
 
 def make_drive(pressure, dt, proto, *, pressure0=None, force0=np.zeros(6), force1=np.zeros(6), t0=0.0, t1=0.0,
                rim_free=RIM_LOCKED, rim_velocity=np.zeros(6), surface=None, damping=None, rim_frame=0.0,
-               gravity=np.zeros(3)):
+               gravity=np.zeros(3), rigid_belt=False, belt_load0=None, belt_load1=None):
     f = lambda v: jnp.asarray(v, float)  # noqa: E731
     return Drive(
         pressure0=f(pressure if pressure0 is None else pressure0), pressure1=f(pressure), force0=f(force0),
         force1=f(force1), t_ramp0=f(t0), t_ramp1=f(t1), rim_free=f(rim_free), rim_velocity=f(rim_velocity),
         surface=NoSurface() if surface is None else surface,
         settle_damping=f(proto.settle_damping if damping is None else damping), damp_rim_frame=f(rim_frame),
-        gravity=f(gravity), dt=f(dt),
+        gravity=f(gravity), dt=f(dt), rigid_belt=bool(rigid_belt),
+        belt_load0=None if belt_load1 is None else f(np.zeros(6) if belt_load0 is None else belt_load0),
+        belt_load1=None if belt_load1 is None else f(belt_load1),
     )
 
 
-def inflate(model, params, pressure, dt, proto, max_steps: int, n_save: int = 64):
+def far_road():
+    """A flat road far below the tire: the same surface type as the loaded phases (so the
+    inflation phase reuses their compiled program) with no contact."""
+    return flat_road(-10.0)
+
+
+def inflate(model, params, pressure, dt, proto, max_steps: int):
     """Rim held, pressure ramped 0 -> p, run until settled. Returns a PhaseResult."""
-    drive = make_drive(pressure, dt, proto, pressure0=0.0, t0=0.0, t1=proto.inflate_ramp)
+    drive = make_drive(pressure, dt, proto, pressure0=0.0, t0=0.0, t1=proto.inflate_ramp, surface=far_road())
     y0 = TireState.at_rest(model, len(params.relaxation_times))
-    ts = jnp.linspace(0.0, proto.inflate_max, n_save)
-    return solve.run_phase(model, params, drive, y0, 0.0, proto.inflate_max, ts, proto.inflate_ramp,
-                           proto.ke_tol, max_steps)
+    ts = jnp.linspace(0.0, proto.inflate_max, solve.N_SAVE)
+    return solve.run_phase_jit(model, params, drive, y0, jnp.asarray(0.0), proto.inflate_max, ts,
+                               proto.inflate_ramp, proto.ke_tol, max_steps)
 
 
 def first_contact_height(model, y):
@@ -75,12 +87,14 @@ def first_contact_height(model, y):
 
 
 def load_phase(model, params, pressure, dt, proto, y0, t0, road, force0, force1, rim_free, ramp, max_time,
-               max_steps: int, n_save: int = 64, damping=None):
+               max_steps: int, damping=None, rigid_belt=False, belt_load0=None, belt_load1=None):
     """Ramp the rim force force0 -> force1 over `ramp` s from t0 with the road `road`, then settle."""
     drive = make_drive(pressure, dt, proto, force0=force0, force1=force1, t0=t0, t1=t0 + ramp,
-                       rim_free=rim_free, surface=road, damping=damping)
-    ts = jnp.linspace(t0, t0 + max_time, n_save)
-    return solve.run_phase(model, params, drive, y0, t0, t0 + max_time, ts, t0 + ramp, proto.ke_tol, max_steps)
+                       rim_free=rim_free, surface=road, damping=damping, rigid_belt=rigid_belt,
+                       belt_load0=belt_load0, belt_load1=belt_load1)
+    ts = jnp.linspace(t0, t0 + max_time, solve.N_SAVE)
+    return solve.run_phase_jit(model, params, drive, y0, jnp.asarray(t0), jnp.asarray(t0 + max_time), ts,
+                               jnp.asarray(t0 + ramp), proto.ke_tol, max_steps)
 
 
 def flat_road(height):

@@ -8,7 +8,6 @@ up); deflections and stiffnesses are reported as positive magnitudes.
 
 import time
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -22,27 +21,14 @@ DOWN = np.array([0.0, 0, -1, 0, 0, 0])
 LEFT = np.array([0.0, 1, 0, 0, 0, 0])
 
 
-@eqx.filter_jit
-def _loaded(model, params, pressure, load, dt, proto, ramp, hold, steps_inflate: int, steps_load: int,
-            n_save: int = 64):
+def _loaded(model, params, pressure, load, dt, proto, ramp, hold, max_steps: int):
     """Inflate, touch the road, ramp the vertical load to `load` over `ramp` s, settle."""
-    inf = phases.inflate(model, params, pressure, dt, proto, steps_inflate)
+    inf = phases.inflate(model, params, pressure, dt, proto, max_steps)
     z0 = phases.first_contact_height(model, inf.y)
     road = phases.flat_road(z0)
     ld = phases.load_phase(model, params, pressure, dt, proto, inf.y, inf.t_end, road, jnp.zeros(6),
-                           load * DOWN, phases.RIM_Z, ramp, ramp + hold, steps_load, n_save=n_save)
+                           load * DOWN, phases.RIM_Z, ramp, ramp + hold, max_steps)
     return inf, z0, ld
-
-
-@eqx.filter_jit
-def _lateral(model, params, pressure, load, lateral, dt, proto, steps_inflate: int, steps_load: int):
-    inf, z0, ld = _loaded(model, params, pressure, load, dt, proto, proto.load_ramp, proto.settle_max,
-                          steps_inflate, steps_load)
-    road = phases.flat_road(z0)
-    lat = phases.load_phase(model, params, pressure, dt, proto, ld.y, ld.t_end, road, load * DOWN,
-                            load * DOWN + lateral * LEFT, phases.RIM_YZ, proto.load_ramp,
-                            proto.load_ramp + proto.settle_max, steps_load)
-    return inf, z0, ld, lat
 
 
 def footprint(model, y, z_road, n_fine: int = 24):
@@ -81,10 +67,10 @@ def _phase_checks(model, name, res, require=True):
 
 
 def _setup(tire, pressure, proto, extra_time):
+    """Stable step and one static loop size for every phase of the experiment."""
     dt = solve.stable_step(tire.model, tire.params, pressure, float(proto.settle_damping))
-    si = phases.steps_for(float(proto.inflate_max), dt)
-    sl = phases.steps_for(float(extra_time), dt)
-    return dt, si, sl
+    longest = max(float(proto.inflate_max), float(extra_time))
+    return dt, phases.steps_for(longest, dt)
 
 
 def _contact_check(res, load):
@@ -102,10 +88,10 @@ def _last(res):
 def run_footprint(tire, condition, proto):
     """E01: contact length 2a and width w under the condition's load (settled)."""
     p, load = condition["pressure_Pa"], condition["load_N"]
-    dt, si, sl = _setup(tire, p, proto, float(proto.load_ramp + proto.settle_max))
+    dt, ns = _setup(tire, p, proto, float(proto.load_ramp + proto.settle_max))
     t0 = time.perf_counter()
-    inf, z0, ld = jax.block_until_ready(_loaded(tire.model, tire.params, jnp.asarray(p), jnp.asarray(load), jnp.asarray(dt),
-                                                proto, proto.load_ramp, proto.settle_max, si, sl))
+    inf, z0, ld = jax.block_until_ready(_loaded(tire.model, tire.params, p, load, dt, proto, float(proto.load_ramp),
+                                                float(proto.settle_max), ns))
     wall = time.perf_counter() - t0
     checks = _phase_checks(tire.model, "inflate", inf) | _phase_checks(tire.model, "load", ld)
     length, width, area = footprint(tire.model, ld.y, z0)
@@ -132,14 +118,14 @@ def run_vertical_stiffness(tire, condition, proto, max_load, stated_load, ramp, 
     """E02: quasi-static vertical load ramp 0 -> max_load; k_sv secant at `stated_load` and the
     slope of a linear fit of load against deflection over `fit_range` (N)."""
     p = condition["pressure_Pa"]
-    dt, si, sl = _setup(tire, p, proto, float(ramp + proto.settle_max))
+    dt, ns = _setup(tire, p, proto, float(ramp + proto.settle_max))
     t0 = time.perf_counter()
-    inf, z0, ld = jax.block_until_ready(_loaded(tire.model, tire.params, jnp.asarray(p), jnp.asarray(max_load), jnp.asarray(dt),
-                                                proto, jnp.asarray(ramp), proto.settle_max, si, sl, n_save=241))
+    inf, z0, ld = jax.block_until_ready(_loaded(tire.model, tire.params, p, max_load, dt, proto, ramp,
+                                                float(proto.settle_max), ns))
     wall = time.perf_counter() - t0
     checks = _phase_checks(tire.model, "inflate", inf) | _phase_checks(tire.model, "load", ld)
     s = ld.saved
-    t = np.asarray(jnp.linspace(inf.t_end, inf.t_end + ramp + proto.settle_max, 241))
+    t = np.asarray(jnp.linspace(inf.t_end, inf.t_end + ramp + proto.settle_max, solve.N_SAVE))
     valid = np.isfinite(np.asarray(s["ke"]))
     in_ramp = valid & (t <= float(inf.t_end) + ramp)
     defl = -np.asarray(s["q"])[:, 2]
@@ -165,10 +151,14 @@ def run_vertical_stiffness(tire, condition, proto, max_load, stated_load, ramp, 
 def run_lateral_stiffness(tire, condition, proto, lateral_force):
     """E09 (static part): loaded tire, lateral force at the rim centre, settled: k_l = F / y_ss."""
     p, load = condition["pressure_Pa"], condition["load_N"]
-    dt, si, sl = _setup(tire, p, proto, float(proto.load_ramp + proto.settle_max))
+    dt, ns = _setup(tire, p, proto, float(proto.load_ramp + proto.settle_max))
     t0 = time.perf_counter()
-    inf, z0, ld, lat = jax.block_until_ready(_lateral(
-        tire.model, tire.params, jnp.asarray(p), jnp.asarray(load), jnp.asarray(lateral_force), jnp.asarray(dt), proto, si, sl))
+    inf, z0, ld = _loaded(tire.model, tire.params, p, load, dt, proto, float(proto.load_ramp),
+                          float(proto.settle_max), ns)
+    lat = phases.load_phase(tire.model, tire.params, p, dt, proto, ld.y, ld.t_end, phases.flat_road(z0),
+                            load * DOWN, load * DOWN + lateral_force * LEFT, phases.RIM_YZ, float(proto.load_ramp),
+                            float(proto.load_ramp + proto.settle_max), ns)
+    jax.block_until_ready(lat)
     wall = time.perf_counter() - t0
     checks = (_phase_checks(tire.model, "inflate", inf) | _phase_checks(tire.model, "load", ld)
               | _phase_checks(tire.model, "lateral", lat))

@@ -13,6 +13,7 @@ from ..materials import prony_weights
 from ..state import Update
 from . import rim
 from .geometry_ops import V, cross, dot
+from .rigid_belt import belt_load_forces, rigid_belt_accelerations
 from .contact import OMEGA_REF, contact_forces
 
 
@@ -66,10 +67,15 @@ def evaluate(model, params, drive, t, y):
     fx = fx + f_d
     p_settle = -jnp.sum(dot(f_d, v_rel))
 
+    if drive.belt_loaded:
+        fx = fx + belt_load_forces(y.x, m, model.belt_mask, drive.belt_load(t))
     M_rim = jnp.concatenate([jnp.full(3, model.rim_mass), model.rim_inertia])
     g6 = jnp.concatenate([drive.gravity * model.rim_mass, jnp.zeros(3)])
     g = drive.gravity
-    ax = fx / m + V(g[0], g[1], g[2])
+    if drive.rigid_belt:
+        ax = rigid_belt_accelerations(y.x, y.v, fx, m, model.belt_mask) + V(g[0], g[1], g[2])
+    else:
+        ax = fx / m + V(g[0], g[1], g[2])
     aq = (fq + drive.rim_force(t) + g6) / M_rim
 
     upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle)
