@@ -77,20 +77,16 @@ def _on_face(u, region, rel=1e-2):
 
 
 def _agrees(surf, idx, u, f, region, x_new, pred, f_new, tol):
-    """Surface and truth agree. The fit must be local: the points inside the region alone
-    determine it (at least as many as the surface has terms). It must predict the new point to
-    tol and those inside points (leave-one-out, where defined, at least one) to sqrt(tol), both
-    relative to the spread of the values inside the region. And the new point must lie inside
-    the region, not on a face: a constrained minimum of the surface says nothing about
-    convergence."""
-    mine = inherit(u[idx], region)
-    if mine.sum() < surf.coef.size or _on_face(x_new, region):
+    """Surface and truth agree: the surface predicts the new point to tol and every point it was
+    fitted to (leave-one-out, which must be defined everywhere: no point may fix its own
+    coefficient) to sqrt(tol), relative to the spread of those values; and the new point lies
+    inside the region, not on a face (a constrained minimum of the surface says nothing about
+    convergence)."""
+    if _on_face(x_new, region) or not np.all(np.isfinite(surf.loo_residuals)):
         return False
-    spread = float(np.ptp(np.append(f[idx[mine]], f_new)))
-    loo = surf.loo_residuals[mine]
-    loo = loo[np.isfinite(loo)]
-    return bool(loo.size > 0 and abs(pred - f_new) <= tol * spread
-                and np.all(np.abs(loo) <= np.sqrt(tol) * spread))
+    spread = float(np.ptp(np.append(f[idx], f_new)))
+    return bool(abs(pred - f_new) <= tol * spread
+                and np.all(np.abs(surf.loo_residuals) <= np.sqrt(tol) * spread))
 
 
 def _fit(u, f, region, n_want):

@@ -99,3 +99,16 @@ def load_phase(model, params, pressure, dt, proto, y0, t0, road, force0, force1,
 
 def flat_road(height):
     return FlatRoad(height=jnp.asarray(height, float), velocity=jnp.zeros(3))
+
+
+def with_spin(model, y, omega):
+    """State y set spinning about the axle at omega (rad/s, + = forward rolling in ISO axes, the
+    bottom of the tire moving towards -x): every node gets the rim frame's velocity, so rolling
+    starts without a spin-up transient."""
+    import equinox as eqx
+
+    from ..physics import rim
+
+    qd = y.qd.at[4].set(omega)
+    v = rim.frame_velocity(y.q, qd, y.x)
+    return eqx.tree_at(lambda s: (s.qd, s.v), y, (qd, v))

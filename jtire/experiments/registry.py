@@ -48,3 +48,19 @@ REGISTRY = {
 
 def register(exp: Experiment):
     REGISTRY[exp.name] = exp
+
+
+def _load_plugins():
+    """Experiment modules register themselves on import; missing ones are simply not offered."""
+    import importlib
+
+    for mod in ("sidewall", "drop", "rolling", "cornering", "drum_cleat", "traction"):
+        name = f"jtire.experiments.{mod}"
+        try:
+            importlib.import_module(name)
+        except ModuleNotFoundError as e:
+            if e.name != name:
+                raise
+
+
+_load_plugins()
