@@ -17,7 +17,8 @@ The loop (Wang, Dong & Aitchison 2001, with the inherited designs of Wang 2003):
    that minimizer repeats a point already evaluated (the surface has nothing new to say there)
    or, optionally, when the region holds fewer than `n_fill` points.
 5. Stop on the budget, on the region reaching its minimum width, or when surface and truth
-   agree (`_agrees`: at the new interior minimizer, and leave-one-out at the fitted points).
+   agree on two proposals in a row (`_agrees`: at the new interior minimizer, and
+   leave-one-out at the fitted points).
 
 Variables keep their physical units outside; inside, everything is in unit coordinates of
 [lower, upper], so the method treats a density in kg/m^3 and a modulus in Pa alike.
@@ -49,6 +50,9 @@ _RULES = ("arsm", "srsm")
 # A proposed point closer than this (in widths of the current region, max-norm) to one already
 # evaluated brings no new information; a space-filling point is evaluated instead.
 _MIN_SEPARATION = 1e-3
+# Agreement must hold on this many consecutive proposals: a fit with one spare point can show
+# small residuals by chance; twice in a row is a real sign of convergence.
+_N_AGREE = 2
 
 
 def _sub_seed(seed, it, salt):
@@ -125,9 +129,9 @@ def minimize(
         n_initial: size of the initial Latin hypercube (default 2d + 1).
         min_width: smallest region width, unit coordinates; the run stops ("region") when
             every width has reached it.
-        tol: agreement stop: the surface predicts the value at its (interior) minimizer to
-            tol, and its leave-one-out residuals inside the region to sqrt(tol), both relative
-            to the spread of the values inside the region; 0 disables.
+        tol: agreement stop, on two proposals in a row: the surface predicts the value at its
+            (interior) minimizer to tol and its fitted points (leave-one-out) to sqrt(tol),
+            relative to the spread of the fitted values; 0 disables.
         region_rule: "arsm" (Wang et al. 2001) or "srsm" (Stander & Craig 2002).
         min_shrink: ARSM: the smallest factor one update may scale a width by; also the zoom
             factor after a proposal that failed to improve.
@@ -174,6 +178,7 @@ def minimize(
 
     region = Region.unit(d)
     failed = False  # did the last proposal fail to improve on the best point?
+    agree = 0  # consecutive proposals on which surface and truth agreed
     try:
         for u in latin_hypercube(n0, d, seed, optimization="random-cd"):
             evaluate(u, phase="initial")
@@ -194,15 +199,25 @@ def minimize(
                 surf, idx = fit
                 x_new, pred = surf.argmin(region.lower, region.upper, _sub_seed(seed, it, 2),
                                           starts=u[best])
-                if np.min(np.max(np.abs(u - x_new) / region.width, axis=1)) < _MIN_SEPARATION:
-                    fill(region, it)  # the surface points at a known point: explore instead
+                near = np.max(np.abs(u - x_new) / region.width, axis=1)
+                if near.min() < _MIN_SEPARATION:
+                    # the surface points at a known point: explore instead. If that point is the
+                    # best one and the surface agrees with the data there, it counts towards
+                    # the agreement stop (an exact surface keeps pointing at its minimum).
+                    on_best = int(np.argmin(near)) == best
+                    agree = (agree + 1 if tol > 0 and on_best and _agrees(
+                        surf, idx, u, f, region, u[best], pred, f[best], tol) else 0)
+                    if agree >= _N_AGREE:
+                        raise _Stop("agreement")
+                    fill(region, it)
                     failed = True
                 else:
                     f_new = evaluate(x_new, phase="minimizer", pred=pred, kind=surf.kind,
                                      region=[region.lower.tolist(), region.upper.tolist()])
                     failed = not f_new < f[best]
-                    if tol > 0 and np.isfinite(f_new) and _agrees(surf, idx, u, f, region,
-                                                                  x_new, pred, f_new, tol):
+                    agree = (agree + 1 if tol > 0 and np.isfinite(f_new) and _agrees(
+                        surf, idx, u, f, region, x_new, pred, f_new, tol) else 0)
+                    if agree >= _N_AGREE:
                         raise _Stop("agreement")
             if region_rule == "srsm":
                 u, f, best = data()

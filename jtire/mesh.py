@@ -153,15 +153,21 @@ class Mesh:
 
 
 def build_mesh(g: Geometry, masses: MassTargets, n_theta: int, n_side: int, n_crown: int) -> Mesh:
-    """Sweep the section profile into a ring of `n_theta` segments and lump the masses.
+    """Sweep the tire's section profile into a ring of `n_theta` segments and lump the masses."""
+    y, r, elem_part = section_profile(g, n_side, n_crown)
+    return build_mesh_from_section(g, masses, n_theta, y, r, elem_part)
 
-    Areal densities are set per region so that the crown region (crown and shoulder parts, the
-    rigid-ring "belt" with its tread) carries the belt mass and the rest of the section carries
-    the remainder of the tire mass: the data give those two masses, not a density per part.
+
+def build_mesh_from_section(g: Geometry, masses: MassTargets, n_theta: int, y, r, elem_part) -> Mesh:
+    """Sweep any bead-to-bead section (y, r: (S,) m; elem_part: (S-1,) part indices) around the axle.
+
+    Areal densities are set per region so that the crown region (the crown part: the rigid-ring
+    "belt" with its tread) carries the belt mass and the rest of the section carries the remainder
+    of the tire mass: the data give those two masses, not a density per part.
     """
     if n_theta < 16:
         raise ValueError(f"mesh.n_theta = {n_theta}: must be >= 16")
-    y, r, elem_part = section_profile(g, n_side, n_crown)
+    y, r, elem_part = np.asarray(y, float), np.asarray(r, float), np.asarray(elem_part, np.int32)
     n_s = y.shape[0]
     theta = np.arange(n_theta) * 2 * np.pi / n_theta
     # theta measured from the contact point (bottom, -z) towards +x: node i=0 is at the bottom
@@ -196,7 +202,8 @@ def build_mesh(g: Geometry, masses: MassTargets, n_theta: int, n_side: int, n_cr
     area = w_circ * l_mer
     a_belt = area[:, belt_mask].sum()
     a_rest = area[:, ~belt_mask].sum()
-    rho = np.where(belt_mask, masses.belt / a_belt, (masses.tire - masses.belt) / a_rest)
+    rho_rest = (masses.tire - masses.belt) / a_rest if a_rest > 0 else 0.0
+    rho = np.where(belt_mask, masses.belt / a_belt, rho_rest)
     node_mass = area * rho[None, :]
     bead_m = node_mass[:, [0, -1]]
     bead_xyz = nodes[:, [0, -1]]

@@ -16,7 +16,7 @@ from .io import atomic_write_csv
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_CONFIG = REPO / "configs" / "default.toml"
-TOP_KEYS = {"experiment", "experiments", "tire_file", "condition", "solver", "description"}
+TOP_KEYS = {"experiment", "experiments", "tire_file", "condition", "solver", "description", "sweep"}
 
 
 def load_run_config(path, overrides=()):

@@ -84,6 +84,7 @@ def observe(model, params, drive, t, y):
         pressure=d["pressure"],
         rim_force=drive.rim_force(t),
         volume=d["volume"],
+        strain_energy=d["strain_energy"],
         belt_disp=belt[0],
         belt_rot=belt[1],
     )

@@ -40,15 +40,29 @@ def quad15_separable(x):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_arsm_branin(seed):
-    # budget 60: all 20 seeds tried in development reached f - f* < 5e-4 within it
+    # budget 60: the 20 seeds tried in development all reached f - f* < 1e-4, most stopping on
+    # agreement after 17 to 26 calls
     r = arsm.minimize(branin, [-5, 0], [10, 15], budget=60, seed=seed)
     assert r.f_best - BRANIN_MIN < 1e-3
     assert r.n_calls <= 60 and len(r.history) == r.n_calls
 
 
-def test_srsm_branin():
-    r = arsm.minimize(branin, [-5, 0], [10, 15], budget=60, seed=0, region_rule="srsm")
-    assert r.f_best - BRANIN_MIN < 1e-3
+def bowl3(x):
+    """Smooth, coupled, not quadratic (quartic terms): minimum 0 at A3."""
+    d = x - A3
+    return float(np.sum([1.0, 5.0, 0.3] * d**2) + 0.1 * np.sum(d**4) + 0.5 * d[0] * d[1])
+
+
+A3 = np.array([0.3, -1.2, 2.0])
+
+
+@pytest.mark.parametrize("rule", ["arsm", "srsm"])
+def test_region_rules_on_a_smooth_bowl(rule):
+    # development, seeds 0-9, budget 60: ARSM f <= 3e-5 on all; SRSM f <= 5e-6 on 9 of 10
+    # (one seed contracted early to 3e-2: SRSM zooms every axis every step)
+    r = arsm.minimize(bowl3, [-3.0] * 3, [3.0] * 3, budget=60, seed=0, region_rule=rule)
+    assert r.f_best < 1e-4
+    np.testing.assert_allclose(r.x_best, A3, atol=0.02)
 
 
 def test_arsm_rosenbrock_5d():
@@ -67,9 +81,12 @@ def test_arsm_15d_quadratic_coupled():
 
 
 def test_arsm_15d_separable_quadratic_stops_on_agreement():
-    # the reduced quadratic is exact: 2d + 1 design points, one proposal, and it agrees
+    # the reduced quadratic is exact, so the first proposal already lands on the minimum; the
+    # agreement stop then needs a fit with every leave-one-out residual defined (development:
+    # 47 calls)
     r = arsm.minimize(quad15_separable, [-5.0] * D15, [5.0] * D15, budget=100, seed=0)
-    assert r.stop_reason == "agreement" and r.n_calls == 2 * D15 + 2
+    assert r.history[2 * D15 + 1]["f"] - 1.0 < 1e-8  # call 2d + 2: the first proposal
+    assert r.stop_reason == "agreement" and r.n_calls <= 60
     assert r.f_best - 1.0 < 1e-8
     np.testing.assert_allclose(r.x_best, X15, atol=1e-4)
 

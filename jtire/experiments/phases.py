@@ -35,7 +35,7 @@ class Protocol(eqx.Module):
 
     @staticmethod
     def from_dict(d):
-        return Protocol(**{k: jnp.asarray(float(d[k])) for k in
+        return Protocol(**{k: jnp.asarray(float(d[k]), dtype=float) for k in  # dtype: never weakly typed (a weak leaf would retrace)
                            ("settle_damping", "ke_tol", "inflate_ramp", "inflate_max", "load_ramp", "settle_max")})
 
 

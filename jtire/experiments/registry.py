@@ -41,8 +41,14 @@ REGISTRY = {
          "fit_range_kN": F(list, U.KN, 0, 500, [10.0, 60.0], "kN")},
         description="E02 total static vertical stiffness k_sv"),
     "lateral_stiffness": Experiment(
-        "lateral_stiffness", lambda tire, c, p, force_kN: static.run_lateral_stiffness(tire, c, p, force_kN),
-        {"force_kN": F(float, U.KN, 0.01, 100, 5.0, "kN")}, description="E09 lateral stiffness k_l (static)"),
+        "lateral_stiffness",
+        lambda tire, c, p, force_kN, decay_s, release_ramp_ms, mass_kg: static.run_lateral_stiffness(
+            tire, c, p, force_kN, decay_s, release_ramp_ms, mass_kg),
+        {"force_kN": F(float, U.KN, 0.01, 100, 5.0, "kN"),
+         "decay_s": F(float, 1, 0, 3, 0.3, "s of free decay after the release (0: static part only)"),
+         "release_ramp_ms": F(float, U.MS, 0, 20, 1.0, "ms (0: a step)"),
+         "mass_kg": F(float, 1, 0, 1e4, 111.25, "kg, m_wheel for C_l (0: the model's wheel mass)")},
+        description="E09 lateral stiffness k_l and damping C_l (release decay)"),
 }
 
 

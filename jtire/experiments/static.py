@@ -92,17 +92,24 @@ def run_footprint(tire, condition, proto):
     t0 = time.perf_counter()
     inf, z0, ld = jax.block_until_ready(_loaded(tire.model, tire.params, p, load, dt, proto, float(proto.load_ramp),
                                                 float(proto.settle_max), ns))
-    wall = time.perf_counter() - t0
+    return reduce_footprint(tire, condition, inf, z0, ld, dt, time.perf_counter() - t0)
+
+
+def reduce_footprint(tire, condition, inf, z0, ld, dt, wall):
+    """Host reduction of a loaded, settled state to the E01 quantities (shared with sweeps)."""
+    load = condition["load_N"]
     checks = _phase_checks(tire.model, "inflate", inf) | _phase_checks(tire.model, "load", ld)
     length, width, area = footprint(tire.model, ld.y, z0)
     deflection = -float(ld.y.q[2])
     fz, err = _contact_check(ld, load)
-    checks |= {"contact_force_N": fz, "contact_vs_load_rel_error": err}
+    fy = float(np.asarray(ld.saved["contact_force"])[_last(ld), 1])
+    checks |= {"contact_force_N": fz, "contact_vs_load_rel_error": err, "contact_lateral_force_N": fy}
     R = tire.spec.geometry.outer_radius
     chord = 2 * np.sqrt(max(R**2 - (R - deflection) ** 2, 0.0))
     ref = tire.spec.reference
     q = {"contact_length_m": length, "contact_width_m": width, "contact_half_length_m": length / 2,
-         "contact_area_m2": area, "deflection_m": deflection, "geometric_chord_m": chord,
+         "contact_area_m2": area, "deflection_m": deflection, "k_secant_N_per_m": load / deflection,
+         "geometric_chord_m": chord,
          "measured_contact_length_m": ref["footprint_length_mm"] or None,
          "measured_contact_width_m": ref["footprint_width_mm"] or None}
     return ExperimentResult("footprint", condition, q, checks=checks, info=_info(dt, wall, inf, ld))
@@ -122,7 +129,12 @@ def run_vertical_stiffness(tire, condition, proto, max_load, stated_load, ramp, 
     t0 = time.perf_counter()
     inf, z0, ld = jax.block_until_ready(_loaded(tire.model, tire.params, p, max_load, dt, proto, ramp,
                                                 float(proto.settle_max), ns))
-    wall = time.perf_counter() - t0
+    return reduce_vertical(tire, condition, proto, inf, ld, max_load, stated_load, ramp, fit_range, dt,
+                           time.perf_counter() - t0)
+
+
+def reduce_vertical(tire, condition, proto, inf, ld, max_load, stated_load, ramp, fit_range, dt, wall):
+    """Host reduction of the E02 ramp (shared with sweeps)."""
     checks = _phase_checks(tire.model, "inflate", inf) | _phase_checks(tire.model, "load", ld)
     s = ld.saved
     t = np.asarray(jnp.linspace(inf.t_end, inf.t_end + ramp + proto.settle_max, solve.N_SAVE))
@@ -133,14 +145,14 @@ def run_vertical_stiffness(tire, condition, proto, max_load, stated_load, ramp, 
     fz = np.asarray(s["contact_force"])[:, 2]
     d_r, l_r, f_r = defl[in_ramp], load[in_ramp], fz[in_ramp]
     sec = signals.secant(d_r, l_r, stated_load, along="y")
-    fit = signals.linear_slope(d_r, l_r, x_range=None) if fit_range is None else None
     mask = (l_r >= fit_range[0]) & (l_r <= fit_range[1])
     fit = signals.linear_slope(d_r[mask], l_r[mask])
     end = _last(ld)
     d_static, l_static = defl[end], load[end]
     d_ramp_at_max = float(np.interp(l_static, l_r, d_r))
+    upper = l_r > 0.25 * max_load  # the first quarter of a smoothstep ramp is where the rim accelerates
     checks |= {"quasi_static_deflection_rel_error": abs(d_ramp_at_max - d_static) / d_static,
-               "contact_vs_load_max_rel_error_in_ramp": float(np.max(np.abs(f_r - l_r)[l_r > 0.1 * max_load] / l_r[l_r > 0.1 * max_load]))}
+               "contact_vs_load_max_rel_error_in_ramp": float(np.max(np.abs(f_r - l_r)[upper] / l_r[upper]))}
     q = {"k_sv_N_per_m": sec.secant, "k_sv_fit_N_per_m": fit.slope, "deflection_m": sec.x_at,
          "stated_load_N": stated_load, "max_load_N": max_load, "fit_r2": fit.r2,
          "settled_deflection_at_max_load_m": float(d_static)}
@@ -148,10 +160,15 @@ def run_vertical_stiffness(tire, condition, proto, max_load, stated_load, ramp, 
     return ExperimentResult("vertical_stiffness", condition, q, signals=sig, checks=checks, info=_info(dt, wall, inf, ld))
 
 
-def run_lateral_stiffness(tire, condition, proto, lateral_force):
-    """E09 (static part): loaded tire, lateral force at the rim centre, settled: k_l = F / y_ss."""
+def run_lateral_stiffness(tire, condition, proto, lateral_force, decay=0.3, release_ramp=1e-3, mass=111.25):
+    """E09: loaded tire, lateral force at the rim centre, settled: k_l = F / y_ss. Then (decay > 0,
+    s) the lateral force is ramped off in `release_ramp` s with the settle damping off and the
+    rim's lateral free decay gives C_l with M = `mass` (m_wheel, kg; <= 0: the model's wheel mass):
+    two peaks and a damped-sine fit (jtire.signals.free_decay) about the fitted final level."""
+    from .sidewall import decay_about_fit, decay_checks, decay_quantities, release_phase
+
     p, load = condition["pressure_Pa"], condition["load_N"]
-    dt, ns = _setup(tire, p, proto, float(proto.load_ramp + proto.settle_max))
+    dt, ns = _setup(tire, p, proto, float(max(proto.load_ramp + proto.settle_max, decay)))
     t0 = time.perf_counter()
     inf, z0, ld = _loaded(tire.model, tire.params, p, load, dt, proto, float(proto.load_ramp),
                           float(proto.settle_max), ns)
@@ -168,4 +185,26 @@ def run_lateral_stiffness(tire, condition, proto, lateral_force):
                "contact_vs_lateral_rel_error": abs(abs(fy_contact) - lateral_force) / lateral_force,
                "vertical_deflection_m": -float(ld.y.q[2])}
     q = {"k_l_N_per_m": lateral_force / abs(y_ss), "lateral_deflection_m": abs(y_ss), "lateral_force_N": lateral_force}
-    return ExperimentResult("lateral_stiffness", condition, q, checks=checks, info=_info(dt, wall, inf, ld, lat))
+    if decay <= 0:
+        return ExperimentResult("lateral_stiffness", condition, q, checks=checks, info=_info(dt, wall, inf, ld, lat))
+    # release: the same DOFs as the hold (y, z free), the vertical load stays, damping off
+    t1 = time.perf_counter()
+    ts, rel = release_phase(tire.model, tire.params, p, dt, proto, lat.y, lat.t_end, phases.flat_road(z0),
+                            load0=load * DOWN + lateral_force * LEFT, load1=load * DOWN, rim_free=phases.RIM_YZ,
+                            ramp=release_ramp, duration=decay)
+    jax.block_until_ready(rel)
+    wall += time.perf_counter() - t1
+    solve.check_phase("release", rel, tire.model, require_settled=False)
+    y = np.asarray(rel.saved["q"])[:, 1] - float(ld.y.q[1])
+    M = mass if mass > 0 else float(tire.model.rim_mass + np.sum(np.asarray(tire.model.node_mass)))
+    fd = decay_about_fit(ts, y, M, float(ts[0]) + release_ramp)
+    q |= decay_quantities(fd, "decay_mass_kg", "C_l", "Ns_per_m")
+    checks |= decay_checks(fd, rel) | {
+        # friction may keep the rim off its pre-load position; this is how far (m)
+        "release_final_level_minus_preload_m": float(fd.x_final),
+        "release_contact_lateral_force_end_N": float(np.asarray(rel.saved["contact_force"])[-1, 1])}
+    sig = {"time_s": ts - ts[0], "rim_y_m": y, "rim_z_m": np.asarray(rel.saved["q"])[:, 2],
+           "contact_force_y_N": np.asarray(rel.saved["contact_force"])[:, 1]}
+    info = _info(dt, wall, inf, ld, lat, rel) | {"decay_s": decay, "release_ramp_s": release_ramp,
+                                                  "decay_samples": int(ts.size)}
+    return ExperimentResult("lateral_stiffness", condition, q, signals=sig, checks=checks, info=info)

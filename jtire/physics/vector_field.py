@@ -79,5 +79,6 @@ def evaluate(model, params, drive, t, y):
     aq = (fq + drive.rim_force(t) + g6) / M_rim
 
     upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle)
-    diag = dict(P=P, F=F, F_n=F_n, gap=gap, pressure=p, volume=vol)
+    d = s - model.s0
+    diag = dict(P=P, F=F, F_n=F_n, gap=gap, pressure=p, volume=vol, strain_energy=0.5 * jnp.sum(K * d * d))
     return upd, diag

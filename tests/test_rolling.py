@@ -1,0 +1,170 @@
+"""E12 rolling resistance (jtire.experiments.rolling).
+
+Fast: the flat-track kinematics (road velocity vs the spinning tire), the whole-period window, the
+reduction on synthetic signals with known answers, config validation. Slow (simulations): the
+energy balance drag * V = dissipated power, no drag without losses, drag rising with load.
+"""
+
+import dataclasses
+from pathlib import Path
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jtire  # noqa: F401  (float64)
+from jtire.errors import ConfigError
+from jtire.experiments import rolling
+from jtire.physics import rim
+from jtire.physics.geometry_ops import V
+
+REPO = Path(__file__).resolve().parents[1]
+CONFIG = REPO / "configs" / "experiments" / "rolling_resistance.toml"
+SPEED = 6.7056  # m/s, 15 mph
+
+TOL_EXACT = 1e-12  # closed-form kinematics and sums: rounding only
+TOL_MEAN = 1e-9  # a mean over whole periods of a sampled sinusoid cancels it to rounding
+
+
+# ---- kinematics and windows -----------------------------------------------------------------
+def test_road_matches_bottom_of_tire_spinning_forward():
+    # forward rolling = positive spin about +y (ISO): the bottom of the tire moves at -x with the road
+    R = 0.4934
+    q = jnp.zeros(6)
+    qd = jnp.zeros(6).at[4].set(SPEED / R)
+    bottom = V(jnp.zeros(1), jnp.zeros(1), jnp.full(1, -R))
+    v = rim.frame_velocity(q, qd, bottom)
+    np.testing.assert_allclose([float(v.x[0]), float(v.y[0]), float(v.z[0])], rolling.road_velocity(SPEED),
+                               atol=TOL_EXACT)
+
+
+@pytest.mark.parametrize("deg", [1.0, 4.0, 20.0])
+def test_road_velocity_slip_angle_sign(deg):
+    # SAE slip angle a > 0: the wheel travels to the right of its heading. Its ground velocity is
+    # minus the road's; in ISO (y left) its direction is at -a from +x.
+    a = np.radians(deg)
+    wheel = -rolling.road_velocity(SPEED, a)
+    assert np.linalg.norm(wheel) == pytest.approx(SPEED, rel=TOL_EXACT)
+    assert np.arctan2(wheel[1], wheel[0]) == pytest.approx(-a, abs=TOL_EXACT)
+    np.testing.assert_allclose(rolling.road_velocity(SPEED, [a, -a])[:, 1], [SPEED * np.sin(a), -SPEED * np.sin(a)],
+                               rtol=TOL_EXACT)
+
+
+def test_release_schedule_ramps_to_zero():
+    sched = rolling.release_schedule(300.0, 0.06)
+    c = [c for c, _ in sched]
+    assert len(sched) == round(0.06 / rolling.RAMP_STAGE_S)
+    assert sum(d for _, d in sched) == pytest.approx(0.06, rel=TOL_EXACT)
+    assert all(a > b for a, b in zip(c, c[1:])) and 0 < c[-1] < 0.05 * 300 and c[0] > 0.95 * 300
+    # smoothstep is antisymmetric about the ramp's middle: c(k) + c(n-1-k) = c0
+    np.testing.assert_allclose(np.add(c, c[::-1]), 300.0, rtol=TOL_EXACT)
+    assert rolling.release_schedule(300.0, 0.0) == []
+
+
+def test_whole_periods_and_segment_period():
+    omega = SPEED / 0.4934
+    T = rolling.segment_period(64, omega)
+    assert T == pytest.approx(2 * np.pi * 0.4934 / (64 * SPEED), rel=TOL_EXACT)
+    w = rolling.whole_periods(0.1, T)
+    assert w / T == pytest.approx(round(w / T), abs=1e-9) and abs(w - 0.1) <= T / 2
+    assert rolling.whole_periods(1e-6, T) == pytest.approx(T)  # never zero periods
+
+
+# ---- reduction on synthetic signals -----------------------------------------------------------
+def _synthetic(drag=210.0, power=1408.0, k=14, n=201):
+    """Hub force = -drag + two ripple harmonics over k whole periods; dissipated energy = linear
+    + a periodic ripple (vanishes at whole periods). Returns t, fx, fz, dissipated."""
+    T = 0.1
+    t = np.linspace(0.0, T, n)
+    w = 2 * np.pi * k / T
+    fx = -drag + 900.0 * np.sin(w * t + 0.3) + 250.0 * np.sin(2 * w * t + 1.1)
+    fz = 41400.0 + 300.0 * np.cos(w * t)
+    d = 500.0 + power * t + 0.4 * np.sin(w * t)
+    return t, fx, fz, d
+
+
+def test_reduce_rolling_recovers_known_drag_and_power():
+    t, fx, fz, d = _synthetic()
+    q = rolling.reduce_rolling(t, fx, fz, d, SPEED)
+    assert q["rolling_resistance_N"] == pytest.approx(210.0, rel=TOL_MEAN)
+    assert q["dissipated_power_W"] == pytest.approx(1408.0, rel=TOL_MEAN)
+    assert q["rolling_resistance_from_power_N"] == pytest.approx(1408.0 / SPEED, rel=TOL_MEAN)
+    assert q["rrc"] == pytest.approx(210.0 / 41400.0, rel=TOL_MEAN)
+    assert q["energy_balance_rel_diff"] == pytest.approx((210.0 - 1408.0 / SPEED) / (1408.0 / SPEED), rel=1e-7)
+    assert abs(q["dissipated_power_halves_rel_diff"]) < 1e-3  # ripple 0.4 J over 0.05 s halves
+
+
+def test_block_stderr_closed_form():
+    means = np.arange(10.0)
+    y = np.repeat(means, 20)  # 10 blocks of 20 equal samples: stderr = std(means) / sqrt(10)
+    assert rolling.block_stderr(y) == pytest.approx(np.std(means, ddof=1) / np.sqrt(10), rel=TOL_EXACT)
+    with pytest.raises(ConfigError):
+        rolling.block_stderr(np.ones(5))
+
+
+def test_calibration_target_lookup():
+    loads, targets = (38700.0, 41400.0), (1529.39, 1701.11)
+    assert rolling.calibration_target(41400.0, loads, targets) == 1701.11
+    assert rolling.calibration_target(38.7e3 * 1.004, loads, targets) == 1529.39  # within 0.5 %
+    assert rolling.calibration_target(45370.0, loads, targets) is None
+    with pytest.raises(ConfigError, match="calibration_targets_N"):
+        rolling.calibration_target(41400.0, loads, targets[:1])
+
+
+# ---- config ---------------------------------------------------------------------------------
+def test_config_parses_to_si():
+    from jtire.run_cli import load_run_config
+
+    spec, exps, cond, _ = load_run_config(CONFIG)
+    (exp, table), = exps
+    assert exp.name == "rolling_resistance"
+    assert table["speed_mph"] == pytest.approx(SPEED, rel=TOL_EXACT)
+    assert cond["load_N"] == pytest.approx(41400.0)
+    assert table["calibration_loads_kN"] == pytest.approx((38700.0, 41400.0))
+
+
+@pytest.mark.parametrize("override, field", [("rolling_resistance.speed_mph=-3", "speed_mph"),
+                                             ("rolling_resistance.measure_s=100", "measure_s"),
+                                             ("rolling_resistance.nonsense=1", "nonsense")])
+def test_config_rejects_bad_fields(override, field):
+    from jtire.run_cli import load_run_config
+
+    with pytest.raises(ConfigError, match=field):
+        load_run_config(CONFIG, [override])
+
+
+# ---- simulations (slow) -------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def rig():
+    from jtire.config import load_tire, parse_solver
+    from jtire.experiments.phases import Protocol
+    from jtire.tire import make_tire
+
+    spec = load_tire(REPO / "configs" / "tires" / "xone_xda.toml")
+    return make_tire(spec), Protocol.from_dict(parse_solver({})), 120 * 6894.757293168
+
+
+STAGES = (0.04, 0.06, 0.02, 0.08)  # settle, ramp, release, measure (s): the E12 defaults
+TOL_BALANCE = 0.15  # drag*V vs dissipated power: hub-force noise over a 0.1 s window + patch micro-slip
+LOSSLESS_FRACTION = 0.1  # without losses the drag is only friction slip and noise
+
+
+@pytest.mark.slow
+def test_energy_balance_and_no_drag_without_losses(rig):
+    tire, proto, p = rig
+    q, _, checks, _ = rolling.run_rolling(tire, p, 41400.0, proto, SPEED, *STAGES)
+    assert checks["vertical_force_vs_load_rel_error"] < 0.02
+    assert q["rolling_resistance_from_power_N"] > 0
+    assert abs(q["energy_balance_rel_diff"]) < TOL_BALANCE
+    q0, *_ = rolling.run_rolling(tire, p, 41400.0, proto, SPEED, *STAGES, params=tire.params.without_damping())
+    assert q0["dissipated_power_W"] == pytest.approx(0.0, abs=1e-9)
+    assert abs(q0["rolling_resistance_N"]) < LOSSLESS_FRACTION * q["rolling_resistance_N"]
+
+
+@pytest.mark.slow
+def test_drag_rises_with_load(rig):
+    tire, proto, p = rig
+    lo, *_ = rolling.run_rolling(tire, p, 25000.0, proto, SPEED, *STAGES)
+    hi, *_ = rolling.run_rolling(tire, p, 45000.0, proto, SPEED, *STAGES)
+    assert hi["rolling_resistance_from_power_N"] > 1.2 * lo["rolling_resistance_from_power_N"]
+    assert hi["rolling_resistance_N"] > lo["rolling_resistance_N"]
