@@ -60,10 +60,10 @@ def main(argv=None) -> int:
 
     rows = []
     for k in range(a.repeat):
-        q, _, checks, info = rolling.run_rolling(tire, p, load, proto, speed, *a.stages, loaded=(dt, inf, z0, ld))
+        q, _, _, info = rolling.run_rolling(tire, p, load, proto, speed, *a.stages, loaded=(dt, inf, z0, ld))
         w, sim, steps = info["wall_s_rolling"], info["rolling_simulated_s"], info["rolling_steps"]
-        rows.append((k, w, sim, steps, w / sim, 1e3 * w / steps, q["rolling_resistance_N"], q["rolling_resistance_stderr_N"],
-                     q["rolling_resistance_from_power_N"], q["energy_balance_rel_diff"]))
+        rows.append((k, w, sim, steps, w / sim, 1e3 * w / steps, q["rolling_resistance_N"],
+                     q["rolling_resistance_stderr_N"], q["rolling_resistance_from_power_N"], q["energy_balance_rel_diff"]))
 
     print(f"E12 rolling resistance: {spec.n_theta} x {tire.model.n_s} nodes, load {a.load_kN:g} kN, "
           f"{a.pressure_psi:g} psi, {a.speed_mph:g} mph, dt {dt:.3g} s, stages {a.stages} s")

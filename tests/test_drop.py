@@ -27,8 +27,8 @@ H = 0.02  # m, drop height (the study's)
 
 # Tolerances, each with its reason.
 TOL_EQUILIBRIUM = 0.01  # settled contact force vs load: settling stops at KE < 1e-3 J, not at rest
-TOL_ENERGY = 0.01  # of the load's work F (h + d): symplectic Euler's bounded energy error + the
-#                    ~1e-3 J left in the inflated state; a damped drop loses ~30 % over the same time
+TOL_ENERGY = 0.005  # of the load's work F (h + d_max): symplectic Euler's bounded energy error
+#                     (measured 4e-4); the same drop with the rubber's losses on loses 13 %
 XI_MAX = 0.1  # the loss tangents are 0.10-0.15: a structural damping ratio stays below ~tan(delta)/2
 TOL_RETURN = 0.05  # of y_ss: the rim returns to its pre-load position when the patch sticks
 
@@ -86,7 +86,8 @@ def _energy(model, params, y, pressure, load, z_road):
 
 
 def test_undamped_frictionless_drop_conserves_energy(coarse_tire, proto):
-    params = eqx.tree_at(lambda p: p.friction, coarse_tire.params.without_damping(), jnp.zeros(()))
+    # zeros_like keeps the weak type of the leaf: no recompilation
+    params = eqx.tree_at(lambda p: p.friction, coarse_tire.params.without_damping(), jnp.zeros_like(coarse_tire.params.friction))
     tire = dataclasses.replace(coarse_tire, params=params)
     dt, inf, z_road, ts, fall = drop.drop(tire, P, LOAD, proto, H, 0.1, gravity=False)
     solve.check_phase("drop", fall, tire.model, require_settled=False)

@@ -67,8 +67,10 @@ def test_region_rules_on_a_smooth_bowl(rule):
 
 def test_arsm_rosenbrock_5d():
     # the curved valley is the hard case for quadratic surfaces; 300 calls reach f < 0.1
-    # (development: 0.0001 to 0.06 over seeds 0-4), from f ~ 1e3 in the initial design
-    r = arsm.minimize(rosenbrock, [-2.0] * 5, [2.0] * 5, budget=300, seed=0)
+    # (development: 2e-4 to 0.08 over seeds 0-4), from f ~ 1e3 in the initial design. The
+    # valley floor is so flat that the default tol (1e-3) stops early (seed 0: f = 0.03 at
+    # call 110, x_5 = 1.3), so this asks for a tighter agreement.
+    r = arsm.minimize(rosenbrock, [-2.0] * 5, [2.0] * 5, budget=300, seed=0, tol=1e-5)
     assert r.f_best < 0.1
     np.testing.assert_allclose(r.x_best, np.ones(5), atol=0.3)
 

@@ -5,7 +5,6 @@ reduction on synthetic signals with known answers, config validation. Slow (simu
 energy balance drag * V = dissipated power, no drag without losses, drag rising with load.
 """
 
-import dataclasses
 from pathlib import Path
 
 import jax.numpy as jnp
@@ -135,36 +134,55 @@ def test_config_rejects_bad_fields(override, field):
 
 # ---- simulations (slow) -------------------------------------------------------------------------
 @pytest.fixture(scope="module")
-def rig():
+def e12():
+    """run(load_N, lossless=False) -> quantities, cached for the module: the default tire, 120 psi,
+    15 mph, the E12 default stages (one compiled program serves every run)."""
     from jtire.config import load_tire, parse_solver
     from jtire.experiments.phases import Protocol
     from jtire.tire import make_tire
 
-    spec = load_tire(REPO / "configs" / "tires" / "xone_xda.toml")
-    return make_tire(spec), Protocol.from_dict(parse_solver({})), 120 * 6894.757293168
+    tire = make_tire(load_tire(REPO / "configs" / "tires" / "xone_xda.toml"))
+    proto = Protocol.from_dict(parse_solver({}))
+    cache = {}
+
+    def run(load, lossless=False):
+        if (load, lossless) not in cache:
+            prm = tire.params.without_damping() if lossless else None
+            q, _, checks, _ = rolling.run_rolling(tire, 120 * 6894.757293168, load, proto, SPEED, *STAGES, params=prm)
+            cache[load, lossless] = q | checks
+        return cache[load, lossless]
+
+    return run
 
 
 STAGES = (0.04, 0.06, 0.02, 0.08)  # settle, ramp, release, measure (s): the E12 defaults
-TOL_BALANCE = 0.15  # drag*V vs dissipated power: hub-force noise over a 0.1 s window + patch micro-slip
-LOSSLESS_FRACTION = 0.1  # without losses the drag is only friction slip and noise
+SLIP_ALLOWANCE = 0.05  # friction micro-slip in the patch is lost but not in `dissipated` (measured +2.4 %
+# of the dissipated power at 38.7, 41.4 and 45.4 kN), so drag * V may exceed it by that much
+N_SIGMA = 3.0  # standard errors of the hub-force mean (block means) allowed on top
+LOSSLESS_FRACTION = 0.1  # without rubber losses only the friction slip (~5 N) and noise remain
 
 
 @pytest.mark.slow
-def test_energy_balance_and_no_drag_without_losses(rig):
-    tire, proto, p = rig
-    q, _, checks, _ = rolling.run_rolling(tire, p, 41400.0, proto, SPEED, *STAGES)
-    assert checks["vertical_force_vs_load_rel_error"] < 0.02
+def test_energy_balance(e12):
+    q = e12(41400.0)
+    assert q["vertical_force_vs_load_rel_error"] < 0.01  # the held load carries through to the road
     assert q["rolling_resistance_from_power_N"] > 0
-    assert abs(q["energy_balance_rel_diff"]) < TOL_BALANCE
-    q0, *_ = rolling.run_rolling(tire, p, 41400.0, proto, SPEED, *STAGES, params=tire.params.without_damping())
-    assert q0["dissipated_power_W"] == pytest.approx(0.0, abs=1e-9)
+    noise = N_SIGMA * q["rolling_resistance_stderr_N"] / q["rolling_resistance_from_power_N"]
+    # drag * V = dissipated power + slip loss >= dissipated power (one-sided up to the noise)
+    assert -noise <= q["energy_balance_rel_diff"] <= SLIP_ALLOWANCE + noise
+    assert abs(q["dissipated_power_halves_rel_diff"]) < 0.02  # steady: both halves dissipate alike
+
+
+@pytest.mark.slow
+def test_no_drag_without_losses(e12):
+    q0, q = e12(41400.0, lossless=True), e12(41400.0)
+    assert q0["dissipated_power_W"] == pytest.approx(0.0, abs=1e-9)  # every loss is zero: nothing dissipates
     assert abs(q0["rolling_resistance_N"]) < LOSSLESS_FRACTION * q["rolling_resistance_N"]
 
 
 @pytest.mark.slow
-def test_drag_rises_with_load(rig):
-    tire, proto, p = rig
-    lo, *_ = rolling.run_rolling(tire, p, 25000.0, proto, SPEED, *STAGES)
-    hi, *_ = rolling.run_rolling(tire, p, 45000.0, proto, SPEED, *STAGES)
+def test_drag_rises_with_load(e12):
+    lo, hi = e12(25000.0), e12(41400.0)
     assert hi["rolling_resistance_from_power_N"] > 1.2 * lo["rolling_resistance_from_power_N"]
-    assert hi["rolling_resistance_N"] > lo["rolling_resistance_N"]
+    assert hi["rolling_resistance_N"] - lo["rolling_resistance_N"] > N_SIGMA * np.hypot(
+        hi["rolling_resistance_stderr_N"], lo["rolling_resistance_stderr_N"])

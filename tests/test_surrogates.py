@@ -117,6 +117,17 @@ def test_argmin_interior_and_on_the_box():
     np.testing.assert_allclose(xb, [0.5, 0.6], atol=1e-6)
 
 
+def test_hessian_and_argmin_of_a_saddle():
+    x = central_composite(2) * 2 - 1  # 9 points on [-1, 1]^2
+    f = x[:, 0] ** 2 - x[:, 1] ** 2 + 0.5 * x[:, 0] * x[:, 1] + 0.1 * x[:, 1]
+    s = fit_quadratic(x, f)
+    np.testing.assert_allclose(s.hessian(), [[2.0, 0.5], [0.5, -2.0]], atol=EXACT)
+    xm, fm = s.argmin([-1, -1], [1, 1], seed=0)
+    # on the face x1 = -1: minimize x0^2 - 0.5 x0 -> x0 = 0.25, f = 0.0625 - 0.125 - 1 - 0.1
+    np.testing.assert_allclose(xm, [0.25, -1.0], atol=1e-9)
+    assert fm == pytest.approx(-1.1625, abs=1e-9)
+
+
 def test_designs():
     n, d = 7, 3
     x = latin_hypercube(n, d, seed=5)

@@ -32,32 +32,38 @@ def _loaded(model, params, pressure, load, dt, proto, ramp, hold, max_steps: int
 
 
 def footprint(model, y, z_road, n_fine: int = 24):
-    """Contact patch length (x) and width (y), m, of state y on the road z = z_road.
+    """Contact patch length (x) and width (y), m, and area (m^2) of state y on the road z = z_road.
 
-    The tread surface is interpolated bilinearly over each tread quad (n_fine^2 samples) and the
-    in-contact region is where it lies below the road, so the patch edges are resolved between
-    nodes rather than snapped to them.
+    Each circumferential line of tread points is interpolated by a periodic cubic spline (the
+    belt is smooth between nodes; linear interpolation would snap the patch ends towards the
+    nodes on a coarse ring), then linearly across the tread columns; the in-contact region is
+    where that surface lies below the road, so the patch edges are resolved between nodes.
     """
+    from scipy.interpolate import CubicSpline
+
     X = model.assemble(y.x, y.q)
     n_tread = len(model.tread_cols_t)
+    T = model.n_theta
     p = tread.tread_points(X, model.tread_cols, model.tread_depth, 1, model.normal_sign)
-    p = np.stack([np.asarray(p.x), np.asarray(p.y), np.asarray(p.z)], -1).reshape(model.n_theta, n_tread, 3)
-    q = np.roll(p, -1, axis=0)
-    u = np.linspace(0, 1, n_fine)[:, None, None, None, None]  # circumferential
-    v = np.linspace(0, 1, n_fine)[None, :, None, None, None]  # lateral
-    a, b, c, d = p[:, :-1], p[:, 1:], q[:, :-1], q[:, 1:]
-    S = (1 - u) * (1 - v) * a + (1 - u) * v * b + u * (1 - v) * c + u * v * d
-    S = S.reshape(-1, 3)
-    inside = S[:, 2] < float(z_road)
+    p = np.stack([np.asarray(p.x), np.asarray(p.y), np.asarray(p.z)], -1).reshape(T, n_tread, 3)
+    k = np.arange(T + 1)
+    fine = np.linspace(0, T, T * n_fine, endpoint=False)
+    closed = np.concatenate([p, p[:1]], axis=0)
+    P = CubicSpline(k, closed, axis=0, bc_type="periodic")(fine)  # (T n_fine, n_tread, 3)
+    v = np.linspace(0, 1, n_fine)[None, None, :, None]
+    S = (1 - v) * P[:, :-1, None] + v * P[:, 1:, None]  # (T n_fine, n_tread - 1, n_fine, 3)
+    inside = S[..., 2] < float(z_road)
     if not inside.any():
         return 0.0, 0.0, 0.0
     pts = S[inside]
     length = float(pts[:, 0].max() - pts[:, 0].min())
     width = float(pts[:, 1].max() - pts[:, 1].min())
-    # contact area from the in-contact fraction of each quad's samples
-    area_q = np.linalg.norm(np.cross(c - a, b - a), axis=-1)  # (T, n_tread-1) approx quad areas
-    frac = inside.reshape(n_fine, n_fine, model.n_theta, n_tread - 1).mean(axis=(0, 1))
-    return length, width, float((frac * area_q).sum())
+    # area: each sample stands for 1 / n_fine of its column gap and one fine circumferential step
+    du = np.roll(S, -1, axis=0) - S
+    dv = (P[:, 1:] - P[:, :-1])[:, :, None, :]
+    cell = np.linalg.norm(np.cross(du, dv), axis=-1) / n_fine
+    area = float((cell * inside).sum())
+    return length, width, area
 
 
 def _phase_checks(model, name, res, require=True):
