@@ -37,6 +37,9 @@ def main(argv=None):
     table = exps[0][1]
     protocol = Protocol.from_dict(proto)
     rows = []
+    head = ("mesh", "DOF", "dt [s]", "steps", "compile [s]", "E02 wall [s]", "us/step", "wall/sim s", "k_sv [kN/m]")
+    print("E02 (inflate + settle + ramp 0-60 kN + settle), after compile, best of", max(1, args.repeat), flush=True)
+    print(" | ".join(f"{h:>12}" for h in head), flush=True)
     for m in args.meshes:
         nt, ns, nc = (int(v) for v in m.split("x"))
         spec = dataclasses.replace(spec0, n_theta=nt, n_side=ns, n_crown=nc)
@@ -60,12 +63,9 @@ def main(argv=None):
         rows.append((m, dof, res.info["dt_s"], steps, t_build + t_first - wall, wall, 1e6 * wall / steps, wall / sim,
                      res.quantities["k_sv_N_per_m"]))
         del first
-    head = ("mesh", "DOF", "dt [s]", "steps", "compile [s]", "E02 wall [s]", "us/step", "wall/sim s", "k_sv [kN/m]")
-    print("E02 (inflate + settle + ramp 0-60 kN + settle), after compile, best of", max(1, args.repeat))
-    print(" | ".join(f"{h:>12}" for h in head))
-    for r in rows:
+        r = rows[-1]
         print(" | ".join([f"{r[0]:>12}", f"{r[1]:>12d}", f"{r[2]:>12.3g}", f"{r[3]:>12d}", f"{r[4]:>12.1f}", f"{r[5]:>12.2f}",
-                          f"{r[6]:>12.0f}", f"{r[7]:>12.1f}", f"{r[8] / 1e3:>12.1f}"]))
+                          f"{r[6]:>12.0f}", f"{r[7]:>12.1f}", f"{r[8] / 1e3:>12.1f}"]), flush=True)
 
 
 if __name__ == "__main__":

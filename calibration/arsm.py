@@ -50,6 +50,9 @@ _RULES = ("arsm", "srsm")
 # A proposed point closer than this (in widths of the current region, max-norm) to one already
 # evaluated brings no new information; a space-filling point is evaluated instead.
 _MIN_SEPARATION = 1e-3
+# Monotone maps of the values the surfaces are fitted to, and their inverses (for the records).
+_TRANSFORMS = {"none": lambda f: f, "square": lambda f: f * np.abs(f)}
+_UNTRANSFORMS = {"none": lambda h: h, "square": lambda h: np.sign(h) * np.sqrt(np.abs(h))}
 # Agreement must hold on this many consecutive proposals: a fit with one spare point can show
 # small residuals by chance; twice in a row is a real sign of convergence.
 _N_AGREE = 2
@@ -116,6 +119,7 @@ def minimize(
     pan_growth: float = 2.0,
     n_fill: int = 0,
     f_target: float | None = None,
+    transform: str = "none",
 ) -> OptimizeResult:
     """Minimize fun over the box [lower, upper] with at most `budget` calls.
 
@@ -140,6 +144,10 @@ def minimize(
             evaluates one space-filling point in it (0: only when the surface proposes a
             point already evaluated).
         f_target: stop ("target") as soon as a value <= f_target is found (None: never).
+        transform: "none", or "square": fit the surfaces to f|f| instead of f. It changes no
+            ranking (so neither the best point nor the threshold's sub-level set), and when f
+            is an absolute error |g| with g smooth it turns the V-shaped valley of f into the
+            smooth g^2, which a quadratic can follow.
     Returns:
         OptimizeResult; stop_reason is "budget", "region", "agreement" or "target".
     """
@@ -152,6 +160,8 @@ def minimize(
     n0 = 2 * d + 1 if n_initial is None else int(n_initial)
     if not d + 1 <= n0 <= int(budget):
         raise ConfigError(f"n_initial = {n0}: must be in [{d + 1}, budget = {budget}] (d = {d})")
+    if transform not in _TRANSFORMS:
+        raise ConfigError(f"transform = {transform!r}: must be one of {sorted(_TRANSFORMS)}")
     if not pan_growth >= 1.0:
         raise ConfigError(f"pan_growth = {pan_growth}: must be >= 1")
     ev = Evaluator(fun, lower, upper, region_rule, seed, budget, history_path)
@@ -173,7 +183,8 @@ def minimize(
         evaluate(x[0], phase="fill", region=[region.lower.tolist(), region.upper.tolist()])
 
     def data():
-        f = np.array(f_list, dtype=float)
+        """Points, fitted values (transformed) and the index of the best point."""
+        f = _TRANSFORMS[transform](np.array(f_list, dtype=float))
         return np.array(u_list), f, int(np.argmin(np.where(np.isfinite(f), f, np.inf)))
 
     region = Region.unit(d)
@@ -212,8 +223,9 @@ def minimize(
                     fill(region, it)
                     failed = True
                 else:
-                    f_new = evaluate(x_new, phase="minimizer", pred=pred, kind=surf.kind,
-                                     region=[region.lower.tolist(), region.upper.tolist()])
+                    f_new = _TRANSFORMS[transform](evaluate(
+                        x_new, phase="minimizer", pred=_UNTRANSFORMS[transform](pred),
+                        kind=surf.kind, region=[region.lower.tolist(), region.upper.tolist()]))
                     failed = not f_new < f[best]
                     agree = (agree + 1 if tol > 0 and np.isfinite(f_new) and _agrees(
                         surf, idx, u, f, region, x_new, pred, f_new, tol) else 0)

@@ -44,8 +44,9 @@ def batched_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, ma
     return jax.vmap(one)(drive, y0, t0, t1, ts, settle_after)
 
 
-def _ts(t0, duration):
-    return jnp.stack([jnp.linspace(a, a + duration, solve.N_SAVE) for a in np.asarray(t0)])
+def _ts(t0, t1):
+    """Save times per case; t1 is the very array passed as the phase end (no rounding mismatch)."""
+    return jnp.stack([jnp.linspace(a, b, solve.N_SAVE) for a, b in zip(jnp.asarray(t0), jnp.asarray(t1))])
 
 
 def run_static_batch(tire, conditions, proto, experiment, table):
@@ -72,14 +73,16 @@ def run_static_batch(tire, conditions, proto, experiment, table):
                                       surface=phases.far_road()) for p in ps])
     y0 = stack([TireState.at_rest(model, len(params.relaxation_times))] * n)
     zeros = jnp.zeros(n)
-    inf = batched_phase(model, params, drives, y0, zeros, jnp.full(n, proto.inflate_max), _ts(zeros, float(proto.inflate_max)),
-                        jnp.full(n, proto.inflate_ramp), proto.ke_tol, ms)
+    t_inf = jnp.full(n, proto.inflate_max)
+    inf = batched_phase(model, params, drives, y0, zeros, t_inf, _ts(zeros, t_inf), jnp.full(n, proto.inflate_ramp),
+                        proto.ke_tol, ms)
     z0 = jax.vmap(lambda y: phases.first_contact_height(model, y))(inf.y)
     t1 = np.asarray(inf.t_end)
     drives = stack([phases.make_drive(ps[i], dt, proto, force1=target[i] * static.DOWN, t0=t1[i], t1=t1[i] + ramp,
                                       rim_free=phases.RIM_Z, surface=phases.flat_road(z0[i])) for i in range(n)])
-    ld = batched_phase(model, params, drives, inf.y, jnp.asarray(t1), jnp.asarray(t1 + ramp + hold), _ts(t1, ramp + hold),
-                       jnp.asarray(t1 + ramp), proto.ke_tol, ms)
+    t_ld = jnp.asarray(t1 + ramp + hold)
+    ld = batched_phase(model, params, drives, inf.y, jnp.asarray(t1), t_ld, _ts(t1, t_ld), jnp.asarray(t1 + ramp),
+                       proto.ke_tol, ms)
     lat = None
     if experiment == "lateral_stiffness":
         t2 = np.asarray(ld.t_end)
@@ -88,8 +91,9 @@ def run_static_batch(tire, conditions, proto, experiment, table):
         drives = stack([phases.make_drive(ps[i], dt, proto, force0=loads[i] * static.DOWN,
                                           force1=loads[i] * static.DOWN + F * static.LEFT, t0=t2[i], t1=t2[i] + lr,
                                           rim_free=phases.RIM_YZ, surface=phases.flat_road(z0[i])) for i in range(n)])
-        lat = batched_phase(model, params, drives, ld.y, jnp.asarray(t2), jnp.asarray(t2 + lr + hold), _ts(t2, lr + hold),
-                            jnp.asarray(t2 + lr), proto.ke_tol, ms)
+        t_lat = jnp.asarray(t2 + lr + hold)
+        lat = batched_phase(model, params, drives, ld.y, jnp.asarray(t2), t_lat, _ts(t2, t_lat), jnp.asarray(t2 + lr),
+                            proto.ke_tol, ms)
     jax.block_until_ready((inf, ld, lat))
     wall = (time.perf_counter() - t_start) / n
 

@@ -47,9 +47,11 @@ def run_cli(args) -> int:
     from .sweep import VMAPPED, run_static_batch
     from .tire import make_tire
 
-    raw = load_toml(args.config)
+    from .config import apply_overrides
+
+    raw = apply_overrides(load_toml(args.config), [o for o in args.overrides if o.startswith("sweep.")])
     conditions = grid_conditions(raw.pop("sweep", {}))
-    spec, exps, base_condition, proto = load_run_config(args.config, args.overrides)
+    spec, exps, base_condition, proto = load_run_config(args.config, [o for o in args.overrides if not o.startswith("sweep.")])
     if len(exps) != 1:
         raise ConfigError("sweep: the config must name exactly one experiment")
     exp, table = exps[0]

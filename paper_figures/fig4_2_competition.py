@@ -8,7 +8,9 @@ seeds of each method, with the study's single runs (Table 4-3) as stars. Histori
     python paper_figures/fig4_2_competition.py --quick --out /tmp/fig4_2.png
 
 --quick uses 3 seeds x 20 calls on the closed-form STAND-IN objective (the soil finite-element
-model costs seconds per call), and says so in the title.
+model costs seconds per call), and says so in the title. The full figure is 3000 FE calls (about
+two hours on one core); it shares nothing with `jtire compete` unless --runs points at the same
+folder (e.g. --runs runs/compete, where `jtire compete` keeps its soil/ histories).
 """
 
 import argparse

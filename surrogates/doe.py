@@ -97,7 +97,8 @@ def central_composite(d: int, alpha: str | float = "face", n_center: int = 1) ->
     _check_n_d(1, d)
     d = int(d)
     if d > _MAX_FACTORIAL_DIM:
-        raise ConfigError(f"central_composite d = {d}: must be <= {_MAX_FACTORIAL_DIM} (2^d corners)")
+        raise ConfigError(
+            f"central_composite d = {d}: must be <= {_MAX_FACTORIAL_DIM} (2^d corners)")
     if alpha == "face":
         a = 1.0
     elif alpha == "rotatable":
@@ -105,7 +106,8 @@ def central_composite(d: int, alpha: str | float = "face", n_center: int = 1) ->
     elif isinstance(alpha, (int, float)) and alpha >= 1.0:
         a = float(alpha)
     else:
-        raise ConfigError(f"central_composite alpha = {alpha!r}: must be 'face', 'rotatable' or >= 1")
+        raise ConfigError(
+            f"central_composite alpha = {alpha!r}: must be 'face', 'rotatable' or >= 1")
     # coded units in [-a, a], then scaled so the design fits the unit box
     corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * d, indexing="ij")).reshape(d, -1).T
     axial = np.concatenate([-a * np.eye(d), a * np.eye(d)])

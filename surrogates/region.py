@@ -9,9 +9,13 @@ Two rules move a box region (lower, upper) inside the global design box:
   (pan) and shrinks by a factor that depends on how far the optimum moved and whether it
   oscillates (zoom).
 
-Safeguards: the best point is kept inside, every width stays >= `min_width`, and one update
-never shrinks a width below `min_shrink` times its old value (so one bad surrogate cannot
-collapse the region). Points that stay inside a shrunk region are inherited (Wang 2003), which
+Safeguards on the ARSM rule (ours, each for a failure seen on test functions): the best point
+is kept inside; every width stays >= `min_width`; one update never shrinks a width below
+`min_shrink` times its old value (one bad surrogate cannot collapse the region); after a
+proposal that failed to improve, the region zooms on the best point instead of trusting the
+surface's sub-level set; and when the best point sits on an inner face of the region, the region
+pans across that face and grows (plain ARSM only shrinks, so it could never follow a valley out
+of an early region). Points that stay inside a shrunk region are inherited (Wang 2003), which
 saves evaluations. All coordinates here are unit coordinates (the global box is [0, 1]^d by
 default).
 """
@@ -63,7 +67,8 @@ def inherit(x, region: Region, rtol: float = 1e-12) -> np.ndarray:
 
 
 def _fit_box(lo, hi, width, inside_lo, inside_hi):
-    """Grow [lo, hi] symmetrically to `width` per axis, then shift it inside [inside_lo, inside_hi]."""
+    """Grow [lo, hi] symmetrically to `width` per axis, then shift it inside the box
+    [inside_lo, inside_hi]."""
     c = 0.5 * (lo + hi)
     half = 0.5 * np.maximum(hi - lo, width)
     half = np.minimum(half, 0.5 * (inside_hi - inside_lo))

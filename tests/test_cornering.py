@@ -86,8 +86,8 @@ def test_config_rejects_out_of_range_angle():
 
 
 # ---- simulations (slow) -------------------------------------------------------------------------
-TOL_ANTISYM = 0.05  # relative to |F_y|, |M_z| at the angle: hub-force noise over the window, and the
-# mesh is only mirror-symmetric to rounding (the contact sub-points sit at fixed circumferential offsets)
+TOL_ANTISYM = 1e-8  # relative: the mesh is mirror-symmetric in y and the two cases differ only in the sign of
+# the road's lateral velocity, so they are mirror images up to rounding (measured 3e-15 on F_y, 3e-14 on M_z)
 
 
 @pytest.mark.slow
@@ -101,7 +101,7 @@ def test_antisymmetry_and_one_compilation():
     p, load = 120 * 6894.757293168, 4625 * 9.81
     n0 = eqx.debug.get_num_traces(cornering.roll_batch_traced)
     a = np.radians([-2.0, 2.0])
-    m, _ = cornering.slip_sweep(tire, p, load, proto, 6.7056, a, 0.2, 0.06, 0.02, 0.04, 0.0)
+    m, _ = cornering.slip_sweep(tire, p, load, proto, 6.7056, a, 0.1, 0.03, 0.01, 0.02, 0.0)
     assert eqx.debug.get_num_traces(cornering.roll_batch_traced) == n0 + 1  # settle, release, measure: one program
     assert m["F_y"][1] > 0 and m["M_z"][1] < 0  # a > 0: pushed left (ISO), aligning moment (M_z,SAE > 0)
     assert m["F_y"][0] == pytest.approx(-m["F_y"][1], rel=TOL_ANTISYM)

@@ -26,7 +26,8 @@ LOAD = 4625 * U.G0
 H = 0.02  # m, drop height (the study's)
 
 # Tolerances, each with its reason.
-TOL_EQUILIBRIUM = 0.01  # settled contact force vs load: settling stops at KE < 1e-3 J, not at rest
+TOL_EQUILIBRIUM = 0.02  # settled contact force vs load: settling stops at KE < 1e-3 J, and the stiff
+#                         tread contact still rings a little then (measured 0.9 % on the full ring)
 TOL_ENERGY = 0.005  # of the load's work F (h + d_max): symplectic Euler's bounded energy error
 #                     (measured 4e-4); the same drop with the rubber's losses on loses 13 %
 XI_MAX = 0.1  # the loss tangents are 0.10-0.15: a structural damping ratio stays below ~tan(delta)/2
@@ -64,7 +65,7 @@ def test_drop_result(dropped):
     # the wheel went deeper than its static deflection on the first impact, and the k_sv
     # deflection is measured from first contact
     assert c["max_deflection_m"] > q["static_deflection_m"] > 0
-    assert q["k_sv_N_per_m"] == pytest.approx(q["static_contact_force_N"] / q["static_deflection_m"])
+    assert q["k_sv_N_per_m"] == pytest.approx(LOAD / q["static_deflection_m"])
     sig = dropped.signals
     assert len({len(v) for v in sig.values()}) == 1
 
@@ -87,7 +88,8 @@ def _energy(model, params, y, pressure, load, z_road):
 
 def test_undamped_frictionless_drop_conserves_energy(coarse_tire, proto):
     # zeros_like keeps the weak type of the leaf: no recompilation
-    params = eqx.tree_at(lambda p: p.friction, coarse_tire.params.without_damping(), jnp.zeros_like(coarse_tire.params.friction))
+    base = coarse_tire.params
+    params = eqx.tree_at(lambda p: p.friction, base.without_damping(), jnp.zeros_like(base.friction))
     tire = dataclasses.replace(coarse_tire, params=params)
     dt, inf, z_road, ts, fall = drop.drop(tire, P, LOAD, proto, H, 0.1, gravity=False)
     solve.check_phase("drop", fall, tire.model, require_settled=False)

@@ -100,16 +100,17 @@ def test_first_mode_rises_with_pressure():
 
 @pytest.mark.slow
 def test_traction_force_zero_at_zero_slip_and_signed():
-    """Free-rolling radius defines zero slip, so F_x(0) is only the rolling resistance, small
-    against the force at +-1 % slip; driving pushes the tire forward (+x), braking back."""
+    """Free rolling defines zero slip, so F_x(0) is only the rolling resistance: the curve crosses
+    zero within 0.3 % of zero slip; driving pushes the tire forward (+x), braking back."""
     tire = coarse_tire()
     proto = Protocol.from_dict(parse_solver({}))
     cond = {"pressure_Pa": 120 * PSI, "load_N": 4625 * G0}
     r = traction.run_traction(tire, cond, proto, drum_diameter_m=3.4, speed_kmh=10.0, slips=(-0.01, 0.0, 0.01),
-                              free_damped_s=0.04, free_s=0.1, damped_s=0.0, measure_s=0.12, fit_range=(0.0, 0.1),
+                              free_damped_s=0.04, free_s=0.15, damped_s=0.0, measure_s=0.12, fit_range=(-0.01, 0.01),
                               linear_tol=0.1, half_length_from="drum")
     k, fx = np.asarray(r.signals["slip"]), np.asarray(r.signals["force_x_N"])
     assert fx[k < 0][0] < 0 < fx[k > 0][0]
-    # 0.2: rolling resistance here is ~1 % of F_z (~0.45 kN) against ~2.4 kN at 1 % slip
-    assert abs(fx[k == 0][0]) < 0.2 * min(abs(fx[k < 0][0]), abs(fx[k > 0][0]))
+    # 0.3 % slip: rolling resistance (<~1 % of F_z) over a slip stiffness of ~5 F_z is <~0.2 %
+    k0 = (fx[k > 0][0] - fx[k < 0][0]) / 0.02
+    assert abs(fx[k == 0][0]) / k0 < 0.003, (fx, k0)
     assert r.quantities["k_k_N_per_slip"] > 0 and r.quantities["k_cx_N_per_m"] > 0

@@ -12,7 +12,7 @@ velocities and jitted once (`roll_batch_jit`; a test counts its traces with
 settle with damping relative to the rim frame, ramp it to zero, release (not measured), measure
 over whole segment-passing periods. All angles start from one loaded state; the lateral deflection
 builds up during settle and ramp (measured at 2 deg: ~85 % of the steady force after 0.1 s = 0.67 m
-rolled, within ~1 % by the end of the default 0.28 s). The settling damping resists the lateral
+rolled; with the default 0.25 s settle the lateral force drifts by at most ~2 % over the window). The settling damping resists the lateral
 deflection that travels through the rim frame, so the force grows by a few percent during the ramp:
 only the undamped window is measured.
 On a 2-core CPU vmap gives no speed-up over a loop (physics notes); it compiles one program for the
@@ -116,8 +116,9 @@ def slip_sweep(tire, pressure, load, proto, speed, slip_angles, settle_s, ramp_s
     out = {k: v.mean(axis=1) for k, v in series.items()}
     out |= {f"{k}_stderr": np.array([rolling.block_stderr(row) for row in v]) for k, v in series.items()}
     # steadiness: drift of the lateral force over the window relative to its mean
-    out["F_y_drift_rel"] = np.array([signals.steady_mean(ts[:-1], row).drift_relative if abs(row.mean()) > 0 else 0.0
-                                     for row in series["F_y"]])
+    # (undefined where the mean vanishes: at 0 deg the mirror-symmetric tire has F_y ~ 1e-11 N)
+    out["F_y_drift_rel"] = np.array([signals.steady_mean(ts[:-1], row).drift_relative if abs(row.mean()) > 1.0
+                                     else np.nan for row in series["F_y"]])
     q_spin = np.asarray(ms.saved["q"])[:, :, 4]
     out["spin"] = (q_spin[:, -1] - q_spin[:, 0]) / (ts[-1] - ts[0])
     steps = sum(int(np.asarray(r.n_steps)[0]) for _, r, _ in stages)
@@ -165,9 +166,9 @@ def _cornering_result(tire, condition, proto, speed, slip_angles, stages, settle
            "lateral_force_stderr_N": lat_err, "F_x_N": means["F_x"], "F_y_SAE_N": -means["F_y"],
            "M_z_SAE_Nm": curves["aligning_moment_Nm"], "M_z_stderr_Nm": means["M_z_stderr"],
            "F_z_N": means["F_z"], "spin_rad_per_s": means["spin"], "F_y_drift_rel": means["F_y_drift_rel"]}
+    drift = np.abs(means["F_y_drift_rel"])
     checks = {"max_vertical_force_vs_load_rel_error": float(np.max(np.abs(means["F_z"] - load)) / load),
-              "max_lateral_drift_rel_over_window": float(np.max(np.abs(means["F_y_drift_rel"][np.abs(a) > 0])))
-              if np.any(np.abs(a) > 0) else 0.0}
+              "max_lateral_drift_rel_over_window": float(np.nanmax(drift)) if np.any(np.isfinite(drift)) else 0.0}
     return ExperimentResult(name, condition, q, signals=sig, checks=checks, info=info)
 
 
@@ -223,9 +224,9 @@ def _relaxation_runner(tire, c, p, **kw):
 # `rolling` is still initializing).
 _COMMON = {
     "speed_mph": F(float, U.MPH, 0.5, 60, 15.0, "mph"),
-    "settle_s": F(float, 1, 0.005, 5, 0.2, "s"),
+    "settle_s": F(float, 1, 0.005, 5, 0.25, "s"),
     "ramp_s": F(float, 1, 0.0, 1, 0.06, "s"),
-    "release_s": F(float, 1, 0.0, 2, 0.02, "s"),
+    "release_s": F(float, 1, 0.0, 2, 0.03, "s"),
     "measure_s": F(float, 1, 0.005, 5, 0.05, "s"),
     "settle_damping_per_s": F(float, 1, 0, 1e4, 0.0, "1/s (0: the solver's settle damping)"),
 }

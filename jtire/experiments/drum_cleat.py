@@ -54,19 +54,21 @@ CROSS_ALLOWANCE = 0.06  # s: room in the impact phase for the cleat to cross the
 def contact_extent(model, y, surface, t=0.0, n_fine: int = 24):
     """x-range (x_min, x_max) and y-width (m) of the tread surface inside `surface` at time t.
 
-    Like `static.footprint` (the tread surface sampled bilinearly, n_fine^2 samples per quad)
-    but against any partner: a sample is in contact where the partner's gap is negative.
-    Returns (nan, nan, 0) when nothing touches.
+    The tread surface is sampled exactly as `static.footprint` samples it (a periodic cubic
+    spline around the circumference, linear across the tread columns, n_fine samples per
+    interval), so patches on a drum and on the flat road compare like for like; a sample is in
+    contact where the partner's gap is negative. Returns (nan, nan, 0) when nothing touches.
     """
+    from scipy.interpolate import CubicSpline
+
     X = model.assemble(y.x, y.q)
-    n_tread = len(model.tread_cols_t)
+    n_tread, T = len(model.tread_cols_t), model.n_theta
     p = tread.tread_points(X, model.tread_cols, model.tread_depth, 1, model.normal_sign)
-    p = np.stack([np.asarray(p.x), np.asarray(p.y), np.asarray(p.z)], -1).reshape(model.n_theta, n_tread, 3)
-    q = np.roll(p, -1, axis=0)
-    u = np.linspace(0, 1, n_fine)[:, None, None, None, None]
-    v = np.linspace(0, 1, n_fine)[None, :, None, None, None]
-    a, b, c, d = p[:, :-1], p[:, 1:], q[:, :-1], q[:, 1:]
-    S = ((1 - u) * (1 - v) * a + (1 - u) * v * b + u * (1 - v) * c + u * v * d).reshape(-1, 3)
+    p = np.stack([np.asarray(p.x), np.asarray(p.y), np.asarray(p.z)], -1).reshape(T, n_tread, 3)
+    fine = np.linspace(0, T, T * n_fine, endpoint=False)
+    P = CubicSpline(np.arange(T + 1), np.concatenate([p, p[:1]], axis=0), axis=0, bc_type="periodic")(fine)
+    v = np.linspace(0, 1, n_fine)[None, None, :, None]
+    S = ((1 - v) * P[:, :-1, None] + v * P[:, 1:, None]).reshape(-1, 3)
     gap = np.asarray(surface.query(V(*(jnp.asarray(S[:, k]) for k in range(3))), t)[0])
     inside = gap < 0
     if not inside.any():

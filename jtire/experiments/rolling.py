@@ -15,12 +15,14 @@ Axes ISO (x forward, y left, z up): forward rolling is positive spin about +y, t
 tire moving at -x with the road. `contact_force` is the road's force on the tire, so the drag is
 -F_x (positive); the axle feels the opposite force.
 
-Two readings of the rolling resistance (physics notes): the hub force (steady mean of -F_x: noisy,
-the polygon effect and the wheel's rotational mode on the tread's shear stiffness swing it by
-~+-1 kN at a few hundred newtons mean) and the dissipated power over the speed (the model's own
-losses: Maxwell branches and tread normal damping, `dissipated`, smooth). In steady state the road's
-power -F_x V equals the dissipated power plus the friction (micro-slip) losses in the patch, which
-`dissipated` does not count; their relative difference is the energy-balance check.
+Two readings of the rolling resistance (physics notes): the hub force (steady mean of -F_x) and the
+dissipated power over the speed (the model's own losses: Maxwell branches and tread normal damping,
+`dissipated`, smooth). The hub force is noisy (polygon effect, the wheel's rotational modes on the
+tread's shear stiffness): on the default tire at 38.7-45.4 kN its standard deviation is 45-75 N
+around a 200-240 N mean, and an 80 ms mean carries a block standard error of 3-7 N (1.5-3 %).
+In steady state the road's power -F_x V equals the dissipated power plus the friction (micro-slip)
+loss in the patch, which `dissipated` does not count: measured, the drag exceeds P / V by +2.4 %
+at all three loads (~30-37 W of slip). Their relative difference is the energy-balance check.
 """
 
 import dataclasses
@@ -60,7 +62,9 @@ def road_velocity(speed, slip_angle=0.0):
 
 def rolling_radius_estimate(outer_radius: float, deflection: float) -> float:
     """Initial guess of the effective rolling radius, m: R0 - deflection / 3 (the classic radial
-    tire estimate). Only the start spin uses it; the free spin finds the real one in ~10 ms."""
+    tire estimate). Only the start spin uses it; the free spin finds the real one during the
+    settle stage (default tire at 41.4 kN: 0.4994 m guessed, 0.4933 m found, spin within 0.3 %
+    after ~15 ms)."""
     return outer_radius - deflection / 3.0
 
 
@@ -145,7 +149,7 @@ def reduce_rolling(t, fx, fz, dissipated, speed):
         "dissipated_power_W": p_diss,
         "rolling_resistance_from_power_N": f_power,
         "rrc_from_power": f_power / fz_mean,
-        "energy_balance_rel_diff": diff / f_power if f_power > 0 else float("inf"),
+        "energy_balance_rel_diff": diff / f_power if f_power > 0 else None,  # None: nothing dissipated
         "unaccounted_power_W": diff * speed,  # friction slip in the patch + hub-force noise
         "dissipated_power_halves_rel_diff": (p2 - p1) / p_diss if p_diss > 0 else 0.0,
         "vertical_force_N": fz_mean,

@@ -26,7 +26,6 @@ range used is reported. k_cx = k_k / a with a the static contact half length fro
 road (`static.run_footprint`, default) or measured on the drum at the same condition.
 """
 
-import math
 import time
 
 import jax
@@ -74,9 +73,12 @@ def run_traction(tire, condition, proto, drum_diameter_m, speed_kmh, slips, free
     kap = np.array(sorted(set(float(s) for s in slips)))
     if not (kap.min() < 0 < kap.max() and np.any(kap == 0.0)):
         raise ConfigError("traction.slips_percent: must hold 0 and at least one negative and one positive slip")
-    if len(fit_range) != 2 or not 0 <= fit_range[0] < fit_range[1]:
-        raise ConfigError(f"traction.fit_range_percent = {[v * 100 for v in fit_range]}: must be [lo, hi] with 0 <= lo < hi")
+    if len(fit_range) != 2 or not fit_range[0] < fit_range[1]:
+        raise ConfigError(f"traction.fit_range_percent = {[v * 100 for v in fit_range]}: must be [lo, hi] with lo < hi")
     lo, hi = (float(v) for v in fit_range)
+    n_in = int(np.sum((kap >= lo) & (kap <= hi)))
+    if n_in < 3:
+        raise ConfigError(f"traction.fit_range_percent = {[v * 100 for v in fit_range]}: holds {n_in} of the slips, need at least 3")
     model, params = tire.model, tire.params
     p, load = condition["pressure_Pa"], condition["load_N"]
     R_d, V_s = drum_diameter_m / 2, speed_kmh
@@ -139,6 +141,10 @@ def run_traction(tire, condition, proto, drum_diameter_m, speed_kmh, slips, free
 
     # slopes: central initial slope, its linear range, and the configured range
     i0 = int(np.nonzero(kappa == 0.0)[0][0])
+    # check on R_e: free rolling is where the wheel torque vanishes (steady driven levels, My is
+    # the contact moment about the axle), interpolated between the levels that bracket it
+    j = int(np.clip(np.argmax(my <= 0), 1, my.size - 1))  # first level driving the wheel (My falls with slip)
+    w_zero = float(omega[j - 1] - my[j - 1] * (omega[j] - omega[j - 1]) / (my[j] - my[j - 1]))
     k0 = (fx[i0 + 1] - fx[i0 - 1]) / (kappa[i0 + 1] - kappa[i0 - 1])
     top = _linear_range(kappa, fx, k0, linear_tol, hi)
     full = signals.linear_slope(kappa, fx, (lo, hi))
@@ -163,6 +169,8 @@ def run_traction(tire, condition, proto, drum_diameter_m, speed_kmh, slips, free
          "max_force_x_N": float(fx.max()), "mean_force_z_N": float(fz.mean()), "deflection_m": defl}
     checks = {"inflate_settled": bool(inf.settled), "load_settled": bool(ld.settled),
               "free_spin_drift_relative": w_free.drift_relative,
+              "rolling_radius_zero_torque_m": V_s / w_zero,
+              "slip_at_zero_torque": w_zero * R_e / V_s - 1.0,
               "max_force_x_drift_over_window_N": float(np.max(np.abs(fx_drift))),
               "max_force_x_drift_vs_load": float(np.max(np.abs(fx_drift)) / load),
               "force_z_vs_load_max_rel": float(np.max(np.abs(fz - load)) / load)}
@@ -185,10 +193,10 @@ SCHEMA = {
     "speed_kmh": F(float, U.KMH, 1, 150, 36.0, "km/h"),
     "slips_percent": F(list, PCT, -50, 50, [-2.0, -1.0, 0.0, 1.0, 2.0, 3.0, 5.0, 7.5, 10.0], "%"),
     "free_damped_s": F(float, 1, 0.001, 1.0, 0.04, "s"),
-    "free_s": F(float, 1, 0.01, 1.0, 0.1, "s"),
+    "free_s": F(float, 1, 0.01, 1.0, 0.2, "s"),
     "damped_s": F(float, 1, 0.0, 1.0, 0.0, "s (0: none)"),
-    "measure_s": F(float, 1, 0.01, 1.0, 0.16, "s"),
-    "fit_range_percent": F(list, PCT, 0, 50, [0.0, 10.0], "%"),
+    "measure_s": F(float, 1, 0.01, 1.0, 0.2, "s"),
+    "fit_range_percent": F(list, PCT, -50, 50, [0.0, 10.0], "%"),
     "linear_tol": F(float, 1, 0.01, 1.0, 0.1, "(relative)"),
     "half_length_from": F(str, default="flat"),
 }
