@@ -1,4 +1,4 @@
-"""The `jtire` command line: `jtire run | sweep | calibrate | sample | compete | data | figures`.
+"""The `jtire` command line: `jtire run | sweep | compete | data` (calibration and sampling: not yet).
 
 Each subcommand lives in the module that owns its work; this file only wires them together, and
 turns every expected failure (a bad config, an unstable simulation) into one line on stderr and a
