@@ -185,7 +185,8 @@ def run_relaxation_length(tire, condition, proto, speed, slip_angles, stages, se
     E09 (`static.run_lateral_stiffness`, force `lateral_force` N) at the same condition."""
     kf_res = _cornering_result(tire, condition, proto, speed, slip_angles, stages, settle_damping, kf_range,
                                kf_range, "relaxation_length")
-    kl_res = static.run_lateral_stiffness(tire, condition, proto, lateral_force)
+    # k_l only: the free decay that gives C_l (decay > 0) is not needed here
+    kl_res = static.run_lateral_stiffness(tire, condition, proto, lateral_force, decay=0.0)
     k_f, k_l = kf_res.quantities["k_f_N_per_rad"], kl_res.quantities["k_l_N_per_m"]
     q = {"sigma_m": k_f / k_l, "k_f_N_per_rad": k_f, "k_l_N_per_m": k_l, "k_f_fit_r2": kf_res.quantities["k_f_fit_r2"],
          "k_f_range_deg": kf_res.quantities["k_f_range_deg"], "lateral_force_N": lateral_force,
