@@ -37,7 +37,7 @@ REGISTRY = {
         "vertical_stiffness", _vertical,
         {"max_load_kN": F(float, U.KN, 1, 500, 60.0, "kN"),
          "stated_load_kN": F(float, U.KN, 0, 500, 0.0, "kN (0: the condition's load)"),
-         "ramp_s": F(float, 1, 0.02, 5, 0.3, "s"),
+         "ramp_s": F(float, 1, 0.02, 5, 0.9, "s"),  # 0.3 s read 4.8 % stiff at 45 kN (viscoelastic lag), 0.9 s 1.0 %
          "fit_range_kN": F(list, U.KN, 0, 500, [10.0, 60.0], "kN")},
         description="E02 total static vertical stiffness k_sv"),
     "lateral_stiffness": Experiment(
