@@ -357,7 +357,7 @@ def add_arguments(parser):
                         "closed-form stand-in for quick checks, not physics")
 
 
-def run_cli(args) -> int:
+def run_cli(args, say) -> int:
     cfg = load_config(args.config)
     comp = dict(cfg.get("competition", {}))
     if args.quick:
@@ -377,6 +377,6 @@ def run_cli(args) -> int:
     title = (f"Optimizer competition, sinkage error: {what}\n{spec.seeds} seeds x "
              f"{spec.budget} calls; median and quartiles; stars: the study's single runs")
     paths = write_outputs(results, spec, out, title)
-    print(format_table(paths["summary"], spec))
-    print(f"wrote {paths['runs_csv']}, {paths['summary_csv']}, {paths['figure']}")
+    say(format_table(paths["summary"], spec))
+    say(f"wrote {paths['runs_csv']}, {paths['summary_csv']}, {paths['figure']}")
     return 0

@@ -11,7 +11,9 @@ import importlib.util
 import sys
 
 # subcommand -> (module, one-line help). Each module defines `add_arguments(parser)` and
-# `run_cli(args) -> int`. Imports are lazy so `jtire --help` is instant.
+# `run_cli(args, say) -> int`, and writes to the terminal only through `say` (`say(text)` to
+# stdout, `say(text, err=True)` to stderr): this file is the one place that prints.
+# Imports are lazy so `jtire --help` is instant.
 SUBCOMMANDS = {
     "run": ("jtire.run_cli", "run virtual experiments from a TOML config (default: the static experiments at rated)"),
     "sweep": ("jtire.sweep_cli", "run an experiment over the load x pressure grid (vmapped)"),
@@ -36,6 +38,10 @@ def _available():
     return out
 
 
+def _say(text: str = "", err: bool = False) -> None:
+    print(text, file=sys.stderr if err else sys.stdout, flush=True)
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="jtire", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -54,7 +60,7 @@ def main(argv=None):
     from jtire.errors import JtireError
 
     try:
-        return int(args._module.run_cli(args) or 0)
+        return int(args._module.run_cli(args, _say) or 0)
     except JtireError as e:
         print(f"jtire {args.command}: error: {e}", file=sys.stderr)
         return 2

@@ -300,13 +300,13 @@ def _fit_rows(fits) -> list:
     return rows
 
 
-def _print_averages(title, avgs) -> None:
-    print(f"\n{title}")
-    print(f"{'cfg':>3} {'label':<22} {'axle':<6} {'psi':>4} {'n':>2} {'Fx lbf':>10} "
+def _print_averages(say, title, avgs) -> None:
+    say(f"\n{title}")
+    say(f"{'cfg':>3} {'label':<22} {'axle':<6} {'psi':>4} {'n':>2} {'Fx lbf':>10} "
           f"{'Fz lbf':>10} {'Fx N':>10} {'Fz N':>10} {'RRC study':>10} {'mean Fx/Fz':>10} "
           f"{'mFx/mFz':>9} {'sem':>8}")
     for r in _average_rows(avgs):
-        print(f"{r[1]:>3} {r[2]:<22} {r[3]:<6} {r[4]:>4.0f} {r[5]:>2} {r[6]:>10.5f} {r[7]:>10.3f} "
+        say(f"{r[1]:>3} {r[2]:<22} {r[3]:<6} {r[4]:>4.0f} {r[5]:>2} {r[6]:>10.5f} {r[7]:>10.3f} "
               f"{r[8]:>10.3f} {r[9]:>10.1f} {r[10]:>10.6f} {r[11]:>10.6f} {r[12]:>9.6f} "
               f"{r[14]:>8.6f}")
 
@@ -315,7 +315,7 @@ def _interval(lo, hi) -> str:
     return f"{f'[{lo:.5f},{hi:.5f}]':>19}"
 
 
-def run_cli(args) -> int:
+def run_cli(args, say) -> int:
     from jtire.io import atomic_write_csv, atomic_write_json
 
     if not 0.0 < args.confidence < 1.0:
@@ -324,30 +324,30 @@ def run_cli(args) -> int:
     out = Path(args.out)
     pct = f"{100 * args.confidence:g}%"
 
-    _print_averages("Track (rigid oval, 15 mph), per-configuration averages", s.track_averages)
-    _print_averages("Sandbox (loose dry sand, 5 mph), per-configuration averages",
+    _print_averages(say, "Track (rigid oval, 15 mph), per-configuration averages", s.track_averages)
+    _print_averages(say, "Sandbox (loose dry sand, 5 mph), per-configuration averages",
                     s.sandbox_averages)
 
-    print(f"\nFits of RRC on Fz (runs at 120 psi, RRC from '{args.rrc}', {pct} CIs, Fz in N)")
-    print(f"{'dataset':<18} {'model':<7} {'param':<8} {'value':>12} {'ci low':>12} "
+    say(f"\nFits of RRC on Fz (runs at 120 psi, RRC from '{args.rrc}', {pct} CIs, Fz in N)")
+    say(f"{'dataset':<18} {'model':<7} {'param':<8} {'value':>12} {'ci low':>12} "
           f"{'ci high':>12} {'n':>3}")
     fit_rows = _fit_rows(s.fits)
     for r in fit_rows:
-        print(f"{r[0]:<18} {r[1]:<7} {r[2]:<8} {r[3]:>12.5g} {r[4]:>12.5g} {r[5]:>12.5g} {r[7]:>3}")
+        say(f"{r[0]:<18} {r[1]:<7} {r[2]:<8} {r[3]:>12.5g} {r[4]:>12.5g} {r[5]:>12.5g} {r[7]:>3}")
 
-    print(f"\nStudy rolling-resistance targets against the track 120 psi fits ({pct} bands)")
-    print(f"{'fit':<19} {'target':<21} {'Fz kN':>5} {'RRC tgt':>8} {'model':<7} {'trend':>8} "
+    say(f"\nStudy rolling-resistance targets against the track 120 psi fits ({pct} bands)")
+    say(f"{'fit':<19} {'target':<21} {'Fz kN':>5} {'RRC tgt':>8} {'model':<7} {'trend':>8} "
           f"{'CI of trend':>19} {'new-point band':>19} {'z trend':>7} {'z pt':>5} {'% off':>7}")
     cmp_rows = []
     for c in s.comparisons:
         cmp_rows.append([c.dataset, c.target, c.load_n, c.target_rrc, c.model, c.pred, c.lower,
                          c.upper, c.obs_lower, c.obs_upper, c.z_mean, c.z_obs, c.percent,
                          c.inside_ci])
-        print(f"{c.dataset:<19} {c.target:<21} {c.load_n / 1e3:>5.1f} {c.target_rrc:>8.5f} "
+        say(f"{c.dataset:<19} {c.target:<21} {c.load_n / 1e3:>5.1f} {c.target_rrc:>8.5f} "
               f"{c.model:<7} {c.pred:>8.5f} {_interval(c.lower, c.upper)} "
               f"{_interval(c.obs_lower, c.obs_upper)} {c.z_mean:>7.1f} {c.z_obs:>5.1f} "
               f"{c.percent:>+7.1f}")
-    print("z trend: target - trend in standard errors of the trend; z pt: in standard errors of "
+    say("z trend: target - trend in standard errors of the trend; z pt: in standard errors of "
           "one new fitted point (a run, or a configuration mean); power law in ln RRC; "
           "% off: target / trend - 1")
 
@@ -368,6 +368,6 @@ def run_cli(args) -> int:
         "targets": [dataclasses.asdict(t) | {"rrc": t.rrc} for t in s.targets],
         "comparisons": [dataclasses.asdict(c) | {"inside_ci": c.inside_ci}
                         for c in s.comparisons]})
-    print(f"\nwrote {out}/track_averages.csv, sandbox_averages.csv, fits.csv, "
+    say(f"\nwrote {out}/track_averages.csv, sandbox_averages.csv, fits.csv, "
           "target_comparison.csv, fits.json")
     return 0

@@ -95,12 +95,11 @@ def add_arguments(p):
     p.add_argument("--out", default=None, help="write DIR/result.json and DIR/signals.csv (DIR/<experiment>/ for several)")
 
 
-def run_cli(args) -> int:
-    import sys
+def run_cli(args, say) -> int:
 
-    results = run_config(args.config, args.overrides, progress=lambda n: print(f"running {n} ...", file=sys.stderr, flush=True))
+    results = run_config(args.config, args.overrides, progress=lambda n: say(f"running {n} ...", err=True))
     for res in results:
-        print("\n".join(table_lines(res)))
+        say("\n".join(table_lines(res)))
     if args.out:
         out = Path(args.out)
         if len(results) == 1:
@@ -111,5 +110,5 @@ def run_cli(args) -> int:
                 res.write(out / res.experiment)
                 rows += [(res.experiment, k, v) for k, v in res.quantities.items()]
             atomic_write_csv(out / "summary.csv", ["experiment", "quantity", "value"], rows)
-        print(f"results written to {out}/")
+        say(f"results written to {out}/")
     return 0

@@ -40,7 +40,7 @@ def add_arguments(p):
     p.add_argument("--batch", type=int, default=9, help="cases per vmapped batch (default 9: the whole grid)")
 
 
-def run_cli(args) -> int:
+def run_cli(args, say) -> int:
     from .config import load_toml
     from .experiments.phases import Protocol
     from .run_cli import load_run_config, table_lines
@@ -62,8 +62,8 @@ def run_cli(args) -> int:
     out = Path(args.out)
     todo = [c for c in conditions if not (out / "cases" / case_name(c) / "result.json").exists()]
     if len(todo) < len(conditions):
-        print(f"resuming: {len(conditions) - len(todo)} of {len(conditions)} cases already done in {out}", file=sys.stderr)
-    bar = tqdm(total=len(todo), desc=f"sweep {exp.name}", unit="case", file=sys.stderr)
+        say(f"resuming: {len(conditions) - len(todo)} of {len(conditions)} cases already done in {out}", err=True)
+    bar = tqdm(total=len(todo), desc=f"sweep {exp.name}", unit="case", err=True)
     while todo:
         chunk = todo[: args.batch] if exp.name in VMAPPED else todo[:1]
         todo = todo[len(chunk):]
@@ -84,6 +84,6 @@ def run_cli(args) -> int:
     header = ["pressure_Pa", "load_N"] + keys
     atomic_write_csv(out / "summary.csv", header, [[c["pressure_Pa"], c["load_N"]] + [q.get(k) for k in keys] for c, q in rows])
     for c, q in rows:
-        print(f"{case_name(c)}: " + ", ".join(f"{k}={v:.6g}" for k, v in q.items() if isinstance(v, (int, float))))
-    print(f"summary written to {out / 'summary.csv'}")
+        say(f"{case_name(c)}: " + ", ".join(f"{k}={v:.6g}" for k, v in q.items() if isinstance(v, (int, float))))
+    say(f"summary written to {out / 'summary.csv'}")
     return 0
