@@ -139,3 +139,19 @@ def test_fig4_2_quick(tmp_path):
     png = tmp_path / "fig4_2.png"
     assert fig.main(["--quick", "--out", str(png)]) == 0
     assert png.stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_arsm_meets_the_issue_goal_on_the_fe_soil_model(cfg, tmp_path):
+    """The goal of the competition: over 20 seeds on the FE soil block (not the stand-in), the
+    median ARSM run reaches 0.18 % sinkage error in at most 24 calls (the study's single run).
+    Measured: 21.5 calls (quartiles 18, 24.8), every seed reaching it; ~35 s for 1000 calls."""
+    from calibration.competition import soil_objective
+
+    spec = _spec(cfg, methods=["arsm"])
+    assert spec.seeds == 20 and spec.budget == 50
+    res = run_competition(soil_objective(cfg), spec, tmp_path, progress=False,
+                          fingerprint=fingerprint(cfg, "soil"))
+    (row,) = summarize(res, spec)
+    assert row["calls_to_0.18pct_median"] <= 24
+    assert row["reached_0.18pct_fraction"] >= 0.9
