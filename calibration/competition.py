@@ -28,7 +28,7 @@ from tqdm import tqdm
 from calibration import arsm, baselines
 from calibration.history import best_so_far
 from jtire.errors import ConfigError
-from jtire.io import atomic_write_csv, atomic_write_json
+from jtire.io import atomic_savefig, atomic_write_csv, atomic_write_json
 
 __all__ = ["METHODS", "CompetitionSpec", "load_config", "soil_objective", "standin_objective",
            "fingerprint",
@@ -317,11 +317,7 @@ def plot_progression(results: dict, spec: CompetitionSpec, path, title: str) -> 
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return atomic_savefig(fig, path, dpi=120)
 
 
 def write_outputs(results: dict, spec: CompetitionSpec, out_dir, title: str) -> dict:

@@ -33,6 +33,17 @@ def atomic_write_text(path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode())
 
 
+def atomic_savefig(fig, path, dpi: int = 120) -> Path:
+    """Save a matplotlib figure atomically (format from the suffix, e.g. .png) and close it."""
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=dpi, format=path.suffix.lstrip(".") or "png")
+    plt.close(fig)
+    return atomic_write_bytes(path, buf.getvalue())
+
+
 def _jsonable(x):
     import numpy as np
 

@@ -8,7 +8,6 @@ study's two calibration targets (configs/reference_xone_xda.toml) as stars.
 """
 
 import argparse
-from pathlib import Path
 
 import matplotlib
 
@@ -17,6 +16,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from jtire.data import PSI_PA, analyze  # noqa: E402
+from jtire.io import atomic_savefig  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -65,10 +65,7 @@ def main(argv=None) -> int:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper left")
     fig.tight_layout()
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=80 if args.quick else 200)
-    plt.close(fig)
+    atomic_savefig(fig, args.out, dpi=80 if args.quick else 200)
     return 0
 
 

@@ -9,7 +9,6 @@ linear one with its 95 % confidence band).
 """
 
 import argparse
-from pathlib import Path
 
 import matplotlib
 
@@ -18,6 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from jtire.data import PSI_PA, analyze  # noqa: E402
+from jtire.io import atomic_savefig  # noqa: E402
 
 AXLES = (("LM", "sandbox_LM_120psi", "C0", "pusher LM (445/50R22.5)"),
          ("LF", "sandbox_LF_120psi", "C1", "steer LF (275/80R22.5)"))
@@ -62,10 +62,7 @@ def main(argv=None) -> int:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="upper right")
     fig.tight_layout()
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=80 if args.quick else 200)
-    plt.close(fig)
+    atomic_savefig(fig, args.out, dpi=80 if args.quick else 200)
     return 0
 
 
