@@ -83,6 +83,7 @@ def observe(model, params, drive, t, y):
         settle_work=y.settle_work,
         pressure=d["pressure"],
         rim_force=drive.rim_force(t),
+        tire_on_rim=d["tire_on_rim"],
         volume=d["volume"],
         strain_energy=d["strain_energy"],
         belt_disp=belt[0],

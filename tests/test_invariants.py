@@ -76,3 +76,36 @@ def test_strain_energy_gradient_matches_finite_differences(coarse_tire):
     h = 1e-4
     fd = (float(energy(1 + h)) - float(energy(1 - h))) / (2 * h)
     assert g == pytest.approx(fd, rel=1e-6)  # energy is linear in the modulus: FD exact to rounding
+
+
+def test_tire_on_rim_balances_node_forces_and_contact(coarse_tire):
+    """Action and reaction: with no gravity and no settle damping, the forces on the free nodes
+    sum to the road's force on the tread minus the tire's force on the rim (`tire_on_rim`, the
+    hub reading). Checked on a random deformed, moving, pressurized state pressed into the road,
+    for force and for moment about the rim centre (spin component; the rim's rx, rz are Euler
+    angles, exact at rx = rz = 0). Exact up to rounding: 1e-9 of the summed force magnitudes."""
+    from jtire.experiments import phases
+    from jtire.physics.vector_field import evaluate
+    from jtire.state import TireState
+
+    m, p = coarse_tire.model, coarse_tire.params
+    proto = phases.Protocol.from_dict(dict(settle_damping=0.0, ke_tol=1e-3, inflate_ramp=0.0, inflate_max=0.1,
+                                           load_ramp=0.1, settle_max=0.1))
+    rng = np.random.default_rng(3)
+    y = TireState.at_rest(m, len(p.relaxation_times))
+    x = m.x_ref + V.of(jnp.asarray(rng.normal(scale=1e-3, size=(3,) + m.node_mass.shape)))
+    v = V.of(jnp.asarray(rng.normal(scale=0.2, size=(3,) + m.node_mass.shape)))
+    q = jnp.array([0.0, 0.0, 0.0, 0.0, 0.3, 0.0])
+    y = y.__class__(x, v, q, jnp.array([0.0, 0, 0, 0, 2.0, 0]), y.maxwell, y.bristle, y.dissipated, y.settle_work)
+    z_low = float(phases.first_contact_height(m, y))
+    drive = phases.make_drive(8.0e5, 1e-5, proto, surface=phases.flat_road(z_low + 0.01))
+    upd, d = evaluate(m, p, drive, 0.0, y)
+    f_nodes = upd.ax * m.node_mass  # gravity is zero in this drive
+    fq, F, P = d["tire_on_rim"], d["F"], d["P"]
+    assert float(jnp.sum(d["F_n"] > 0)) > 5  # the road really pushes
+    total = f_nodes.sum().array() + fq[:3] - F.sum().array()
+    scale = float(jnp.sum(jnp.abs(f_nodes.array())))
+    assert float(jnp.max(jnp.abs(total))) < 1e-9 * scale
+    my = lambda r, f: (r.z * f.x - r.x * f.z).sum()  # noqa: E731  moment about y (axle)
+    mom = my(y.x, f_nodes) + fq[4] - my(P, F)
+    assert abs(float(mom)) < 1e-9 * scale

@@ -12,15 +12,13 @@ experiment compiles one program besides the shared inflation):
 4. damping off, the cleat starting `lead_time` ahead of where it first touches the tire; the free
    response after the cleat has left the contact patch is recorded at `sample_rate`.
 
-Axle force: with the rim z locked, the force of the tire on the rim is F_cz - dP_z/dt (P_z the
-tire's vertical momentum, F_cz the drum's force on the tire). The saved outputs have the contact
-force and the belt's mass-centre displacement, so the signal is F_axle = F_cz - m_belt a_belt,z
-(a_belt from central differences of the belt displacement; the 9 kg of sidewall nodes are left
-out). The spectra of F_cz alone and of the belt's vertical displacement are reported beside it:
-a mode has one frequency whatever the output, but each output weights the modes differently (on
-the default tire F_cz is dominated by a mode near 110 Hz in which the contact patch works, while
-the axle force and the belt's mass centre show the belt's vertical mode). The exact rim reaction
-would need one more saved output (the rim's generalized force), which `solve.observe` lacks.
+Axle force: the tire's force on the rim (`tire_on_rim`, saved by `solve.observe`: beads and the
+pressure on the rim closure, what a hub dynamometer reads), exact with every node's inertia in it.
+The spectra of the drum's force on the tire F_cz and of the belt's vertical displacement are
+reported beside it: a mode has one frequency whatever the output, but each output weights the
+modes differently (on the default tire F_cz is dominated by a mode near 110 Hz in which the
+contact patch works, while the axle force and the belt's mass centre show the belt's vertical
+mode).
 
 The spectrum is `spectra.first_mode`: Hann window, zero padding, interpolated peak, and a modal fit.
 k_dv = (2 pi f)^2 m_b with f the interpolated spectral peak (the study's FFT peak, a damped
@@ -177,9 +175,7 @@ def run_drum_cleat(tire, condition, proto, drum_diameter_m, speed_kmh, cleat_dia
     t_touch, t_leave = t + lead_time_s, t + (phi_imp - phi_leave) / omega_d
     fc = _saved_np(imp, "contact_force")[:, 2]
     bz = _saved_np(imp, "belt_disp")[:, 2]
-    m_belt = float(jnp.sum(model.node_mass * model.belt_mask))
-    acc = np.gradient(np.gradient(bz, ts), ts)
-    f_axle = fc - m_belt * acc
+    f_axle = _saved_np(imp, "tire_on_rim")[:, 2]
     spin = _saved_np(imp, "qd")[:, 4]
     band = (lo, hi)
     sp = spectra.first_mode(ts, f_axle, f_band=band, pad_to_resolution=pad_resolution_Hz, t_start=t_leave)
@@ -208,8 +204,8 @@ def run_drum_cleat(tire, condition, proto, drum_diameter_m, speed_kmh, cleat_dia
               "free_samples": sp.n}
     info = {"dt_s": dt, "steps": int(inf.n_steps + ld.n_steps + roll.n_steps + imp.n_steps),
             "simulated_s": float(imp.t_end), "wall_s_including_compile": wall,
-            "axle_force": "F_contact_z - m_belt * a_belt_z (belt mass-centre acceleration, sidewall nodes left out)",
-            "m_belt_nodes_kg": m_belt, "drum_radius_m": R_d, "surface_speed_m_s": V_s,
+            "axle_force": "tire_on_rim z: the tire's force on the rim (beads and rim closure pressure)",
+            "drum_radius_m": R_d, "surface_speed_m_s": V_s,
             "cleat_radius_m": r_c, "cleat_height_m": h_c, "cleat_height_note": "not given by the study: a config choice",
             "t_cleat_touch_s": t_touch, "t_cleat_leave_s": t_leave, "spectrum_from_s": t_leave,
             "sample_rate_Hz": sample_rate_Hz, "f_band_Hz": [lo, hi], "initial_spin_rad_s": omega_w,

@@ -80,5 +80,9 @@ def evaluate(model, params, drive, t, y):
 
     upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle)
     d = s - model.s0
-    diag = dict(P=P, F=F, F_n=F_n, gap=gap, pressure=p, volume=vol, strain_energy=0.5 * jnp.sum(K * d * d))
+    # fq: generalized force (N, N m about the rim centre) of the tire on the rim: beads, the
+    # pressure on the rim closure and the reaction of rim-frame damping. It is what a hub
+    # dynamometer reads, whatever the rim's own mass and drive.
+    diag = dict(P=P, F=F, F_n=F_n, gap=gap, pressure=p, volume=vol, strain_energy=0.5 * jnp.sum(K * d * d),
+                tire_on_rim=fq)
     return upd, diag
