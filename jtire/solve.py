@@ -81,6 +81,7 @@ def observe(model, params, drive, t, y):
         ke=kinetic_energy(model, y),
         dissipated=y.dissipated,
         settle_work=y.settle_work,
+        friction_work=y.friction_work,
         pressure=d["pressure"],
         rim_force=drive.rim_force(t),
         tire_on_rim=d["tire_on_rim"],

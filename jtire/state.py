@@ -18,7 +18,8 @@ from .physics.geometry_ops import smooth_step
 class TireState(eqx.Module):
     """x, v: V of (T, S-2) free nodes (m, m/s); q, qd: (6,) rim; maxwell: (B, n_strain) branch
     stresses; bristle: V of (N,) tread shear deflections (m); dissipated: J in the rubber (Maxwell
-    branches and tread), settle_work: J removed by the artificial settling damping."""
+    branches and tread), settle_work: J removed by the artificial settling damping, friction_work:
+    J lost to sliding at the contact points (the bristles' plastic slip)."""
 
     x: V
     v: V
@@ -28,20 +29,22 @@ class TireState(eqx.Module):
     bristle: V
     dissipated: Float[Array, ""]
     settle_work: Float[Array, ""]
+    friction_work: Float[Array, ""]
 
     @staticmethod
     def at_rest(model, n_branches: int):
         z = jnp.zeros(())
         zp = jnp.zeros(model.n_points)
         return TireState(model.x_ref, model.x_ref.map(jnp.zeros_like), jnp.zeros(6), jnp.zeros(6),
-                         jnp.zeros((n_branches, model.s0.shape[0])), V(zp, zp, zp), z, z)
+                         jnp.zeros((n_branches, model.s0.shape[0])), V(zp, zp, zp), z, z, z)
 
     def advance(self, upd: "Update", h, drive: "Drive"):
         free = drive.rim_free
         qd = jnp.where(free, self.qd + h * upd.aq, drive.rim_velocity)
         v = self.v + upd.ax * h
         return TireState(self.x + v * h, v, self.q + h * qd, qd, upd.maxwell, upd.bristle,
-                         self.dissipated + h * upd.power_rubber, self.settle_work + h * upd.power_settle)
+                         self.dissipated + h * upd.power_rubber, self.settle_work + h * upd.power_settle,
+                         self.friction_work + h * upd.power_friction)
 
 
 class Update(eqx.Module):
@@ -53,6 +56,7 @@ class Update(eqx.Module):
     bristle: Array
     power_rubber: Array
     power_settle: Array
+    power_friction: Array
 
 
 class Drive(eqx.Module):

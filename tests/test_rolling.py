@@ -91,6 +91,11 @@ def test_reduce_rolling_recovers_known_drag_and_power():
     assert q["rrc"] == pytest.approx(210.0 / 41400.0, rel=TOL_MEAN)
     assert q["energy_balance_rel_diff"] == pytest.approx((210.0 - 1408.0 / SPEED) / (1408.0 / SPEED), rel=1e-7)
     assert abs(q["dissipated_power_halves_rel_diff"]) < 1e-3  # ripple 0.4 J over 0.05 s halves
+    # a sliding loss of 34 W joins the rubber's 1408 W in the balance
+    qf = rolling.reduce_rolling(t, fx, fz, d, SPEED, friction=2.0 + 34.0 * t)
+    assert qf["friction_power_W"] == pytest.approx(34.0, rel=1e-9)
+    assert qf["rubber_power_W"] == pytest.approx(q["dissipated_power_W"], rel=1e-12)
+    assert qf["rolling_resistance_from_power_N"] == pytest.approx((q["dissipated_power_W"] + 34.0) / SPEED, rel=1e-12)
 
 
 def test_block_stderr_closed_form():
@@ -156,8 +161,9 @@ def e12():
 
 
 STAGES = (0.04, 0.06, 0.02, 0.08)  # settle, ramp, release, measure (s): the E12 defaults
-SLIP_ALLOWANCE = 0.05  # friction micro-slip in the patch is lost but not in `dissipated` (measured +2.4 %
-# of the dissipated power at 38.7, 41.4 and 45.4 kN), so drag * V may exceed it by that much
+BALANCE_TOL = 0.005  # drag * V vs rubber + sliding losses: the remainder is the O(dt) bristle storage
+# k_t |dz|^2 / 2 per step and the window's ends (measured -0.07 % at 41.4 kN; +2.4 % before sliding
+# was counted)
 N_SIGMA = 3.0  # standard errors of the hub-force mean (block means) allowed on top
 LOSSLESS_FRACTION = 0.1  # without rubber losses only the friction slip (~5 N) and noise remain
 
@@ -168,16 +174,20 @@ def test_energy_balance(e12):
     assert q["vertical_force_vs_load_rel_error"] < 0.01  # the held load carries through to the road
     assert q["rolling_resistance_from_power_N"] > 0
     noise = N_SIGMA * q["rolling_resistance_stderr_N"] / q["rolling_resistance_from_power_N"]
-    # drag * V = dissipated power + slip loss >= dissipated power (one-sided up to the noise)
-    assert -noise <= q["energy_balance_rel_diff"] <= SLIP_ALLOWANCE + noise
+    # drag * V = rubber + sliding losses, both counted by the model
+    assert abs(q["energy_balance_rel_diff"]) <= BALANCE_TOL + noise
+    assert 0 < q["friction_power_W"] < 0.2 * q["dissipated_power_W"]  # micro-slip: a small share
     assert abs(q["dissipated_power_halves_rel_diff"]) < 0.02  # steady: both halves dissipate alike
 
 
 @pytest.mark.slow
 def test_no_drag_without_losses(e12):
     q0, q = e12(41400.0, lossless=True), e12(41400.0)
-    assert q0["dissipated_power_W"] == pytest.approx(0.0, abs=1e-9)  # every loss is zero: nothing dissipates
+    assert q0["rubber_power_W"] == pytest.approx(0.0, abs=1e-9)  # every rubber loss is zero
     assert abs(q0["rolling_resistance_N"]) < LOSSLESS_FRACTION * q["rolling_resistance_N"]
+    # what drag is left is the sliding loss: drag * V = friction power, up to the hub-force noise
+    noise = N_SIGMA * q0["rolling_resistance_stderr_N"]
+    assert abs(q0["rolling_resistance_N"] - q0["friction_power_W"] / SPEED) <= noise + 0.05 * q0["rolling_resistance_N"]
 
 
 @pytest.mark.slow

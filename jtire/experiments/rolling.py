@@ -16,13 +16,14 @@ tire moving at -x with the road. `contact_force` is the road's force on the tire
 -F_x (positive); the axle feels the opposite force.
 
 Two readings of the rolling resistance (physics notes): the hub force (steady mean of -F_x) and the
-dissipated power over the speed (the model's own losses: Maxwell branches and tread normal damping,
-`dissipated`, smooth). The hub force is noisy (polygon effect, the wheel's rotational modes on the
+lost power over the speed (the model's own losses, smooth: Maxwell branches and tread normal
+damping, `dissipated`, plus sliding in the patch, `friction_work`). The hub force is noisy (polygon effect, the wheel's rotational modes on the
 tread's shear stiffness): on the default tire at 38.7-45.4 kN its standard deviation is 45-75 N
 around a 200-240 N mean, and an 80 ms mean carries a block standard error of 3-7 N (1.5-3 %).
-In steady state the road's power -F_x V equals the dissipated power plus the friction (micro-slip)
-loss in the patch, which `dissipated` does not count: measured, the drag exceeds P / V by +2.4 %
-at all three loads (~30-37 W of slip). Their relative difference is the energy-balance check.
+In steady state the road's power -F_x V equals the rubber's dissipated power plus the friction
+(micro-slip) loss in the patch; their relative difference is the energy-balance check. (Before
+the friction counter existed the drag exceeded the rubber's P / V alone by +2.4 % at all three
+loads: ~30-37 W of slip.)
 """
 
 import dataclasses
@@ -123,18 +124,22 @@ def block_stderr(y, n_blocks: int = N_BLOCKS) -> float:
     return float(means.std(ddof=1) / np.sqrt(n_blocks))
 
 
-def reduce_rolling(t, fx, fz, dissipated, speed):
+def reduce_rolling(t, fx, fz, dissipated, speed, friction=None):
     """Rolling resistance from one measurement window.
 
-    t, fx, fz, dissipated: (n,) samples at uniform times spanning a whole number of ripple
-    periods, endpoint included (s, N, N, J); speed m/s. The hub-force mean uses samples [0, n-1)
-    (uniform over one half-open span of whole periods); the dissipated power is the exact
-    energy over the span, (D[-1] - D[0]) / T. Returns a dict of SI quantities.
+    t, fx, fz, dissipated, friction: (n,) samples at uniform times spanning a whole number of
+    ripple periods, endpoint included (s, N, N, J, J; friction None = no sliding loss); speed m/s.
+    The hub-force mean uses samples [0, n-1) (uniform over one half-open span of whole periods);
+    the lost powers are exact energies over the span, (D[-1] - D[0]) / T. Returns a dict of SI
+    quantities.
     """
-    t, fx, fz, d = (np.asarray(a, float) for a in (t, fx, fz, dissipated))
+    t, fx, fz, d_rub = (np.asarray(a, float) for a in (t, fx, fz, dissipated))
+    d_fric = np.zeros_like(t) if friction is None else np.asarray(friction, float)
+    d = d_rub + d_fric
     drag = signals.steady_mean(t[:-1], -fx[:-1])
     span = t[-1] - t[0]
     p_diss = (d[-1] - d[0]) / span
+    p_fric = (d_fric[-1] - d_fric[0]) / span
     half = len(t) // 2
     p1 = (d[half] - d[0]) / (t[half] - t[0])
     p2 = (d[-1] - d[half]) / (t[-1] - t[half])
@@ -146,11 +151,13 @@ def reduce_rolling(t, fx, fz, dissipated, speed):
         "rrc": drag.mean / fz_mean,
         "rolling_resistance_stderr_N": block_stderr(-fx[:-1]),
         "rolling_resistance_std_N": drag.std,
-        "dissipated_power_W": p_diss,
+        "dissipated_power_W": p_diss,  # rubber + sliding
+        "rubber_power_W": p_diss - p_fric,
+        "friction_power_W": p_fric,
         "rolling_resistance_from_power_N": f_power,
         "rrc_from_power": f_power / fz_mean,
         "energy_balance_rel_diff": diff / f_power if f_power > 0 else None,  # None: nothing dissipated
-        "unaccounted_power_W": diff * speed,  # friction slip in the patch + hub-force noise
+        "unaccounted_power_W": diff * speed,  # hub-force noise + O(dt) bristle storage
         "dissipated_power_halves_rel_diff": (p2 - p1) / p_diss if p_diss > 0 else 0.0,
         "vertical_force_N": fz_mean,
         "window_s": span,
@@ -227,7 +234,8 @@ def run_rolling(tire, pressure, load, proto, speed, settle_s, ramp_s, release_s,
     jax.block_until_ready(ms)
     t_end = time.perf_counter()
     s = {k: np.asarray(v) for k, v in ms.saved.items()}
-    q = reduce_rolling(ts_m, s["contact_force"][:, 0], s["contact_force"][:, 2], s["dissipated"], speed)
+    q = reduce_rolling(ts_m, s["contact_force"][:, 0], s["contact_force"][:, 2], s["dissipated"], speed,
+                       s["friction_work"])
     spin = (s["q"][-1, 4] - s["q"][0, 4]) / (ts_m[-1] - ts_m[0])
     q |= {"effective_rolling_radius_m": speed / spin, "spin_rad_per_s": spin, "deflection_m": deflection,
           "speed_m_per_s": speed, "load_N": load}
@@ -246,6 +254,7 @@ def run_rolling(tire, pressure, load, proto, speed, settle_s, ramp_s, release_s,
         "spin_rad_per_s": cat(lambda sv, ts: np.asarray(sv["qd"])[:, 4]),
         "rim_z_m": cat(lambda sv, ts: np.asarray(sv["q"])[:, 2]),
         "dissipated_J": cat(lambda sv, ts: np.asarray(sv["dissipated"])),
+        "friction_work_J": cat(lambda sv, ts: np.asarray(sv["friction_work"])),
         "settle_work_J": cat(lambda sv, ts: np.asarray(sv["settle_work"])),
     }
     steps_roll = sum(int(r.n_steps) for _, r, _ in stages)

@@ -58,7 +58,10 @@ def contact_forces(surface, P, Pdot, t, bristle, k_n, k_t, c_n, mu, dt):
     """Forces on the contact points and the updated bristle state.
 
     P, Pdot, bristle: V of (N,). Returns F (V), bristle_new (V), F_n (N,) normal force
-    magnitudes, gap (N,), and the power dissipated by normal damping (W).
+    magnitudes, gap (N,), the power dissipated by normal damping (W) and the power lost to
+    sliding (W): the return mapping's plastic slip z_trial - z_new against the bristle force
+    k_t z_new, per step, over dt. (With it, the work of the contact forces balances elastic
+    storage plus losses to O(dt): the remainder per step is k_t |z_new - z_old|^2 / 2.)
     """
     gap, n, v_s = surface.query(P, t)
     rel = Pdot - v_s
@@ -78,4 +81,5 @@ def contact_forces(surface, P, Pdot, t, bristle, k_n, k_t, c_n, mu, dt):
     scale = jnp.minimum(1.0, limit / (k_t * zmag + 1e-30))
     z_new = z_trial * scale
     F = F_n * n - k_t * z_new
-    return F, z_new, F_n, gap, p_damp
+    p_slide = jnp.sum(k_t * dot(z_new, z_trial - z_new)) / dt
+    return F, z_new, F_n, gap, p_damp, p_slide

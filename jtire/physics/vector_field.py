@@ -49,7 +49,7 @@ def evaluate(model, params, drive, t, y):
     p = drive.pressure(t)
     k_n, k_t, _ = model.contact_stiffness(params)
     c_n = params.tread_loss * k_n / OMEGA_REF
-    F, bristle, F_n, gap, p_tread = contact_forces(drive.surface, P, Pdot, t, y.bristle, k_n, k_t, c_n,
+    F, bristle, F_n, gap, p_tread, p_slide = contact_forces(drive.surface, P, Pdot, t, y.bristle, k_n, k_t, c_n,
                                                    params.friction, drive.dt)
     ((fx, fq),) = jax.linear_transpose(lin, Y)((-sigma, p, F))
 
@@ -78,7 +78,7 @@ def evaluate(model, params, drive, t, y):
         ax = fx / m + V(g[0], g[1], g[2])
     aq = (fq + drive.rim_force(t) + g6) / M_rim
 
-    upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle)
+    upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle, p_slide)
     d = s - model.s0
     # fq: generalized force (N, N m about the rim centre) of the tire on the rim: beads, the
     # pressure on the rim closure and the reaction of rim-frame damping. It is what a hub
