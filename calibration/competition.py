@@ -349,13 +349,17 @@ def add_arguments(parser):
                         help=f"{QUICK_SEEDS} seeds, {QUICK_BUDGET} calls (a smoke run)")
     parser.add_argument("--methods", default=None,
                         help="comma-separated subset, e.g. arsm,ga (config: all it lists)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a config field, e.g. --set soil.pressure_Pa=80000 (repeatable)")
     parser.add_argument("--objective", choices=("soil", "standin"), default="soil",
                         help="soil: the finite-element plate test (default); standin: a "
                         "closed-form stand-in for quick checks, not physics")
 
 
 def run_cli(args, say) -> int:
-    cfg = load_config(args.config)
+    from jtire.config import apply_overrides
+
+    cfg = apply_overrides(load_config(args.config), args.set)
     comp = dict(cfg.get("competition", {}))
     if args.quick:
         comp.update(seeds=QUICK_SEEDS, budget=QUICK_BUDGET)

@@ -64,6 +64,10 @@ def main(argv=None):
     except JtireError as e:
         print(f"jtire {args.command}: error: {e}", file=sys.stderr)
         return 2
+    except OSError as e:  # an output folder that cannot be made or written, a disk full, ...
+        where = f" {e.filename}" if getattr(e, "filename", None) else ""
+        print(f"jtire {args.command}: error: cannot read or write{where}: {e.strerror or e}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print(f"jtire {args.command}: interrupted (progress saved where the command supports it)",
               file=sys.stderr)

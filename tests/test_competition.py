@@ -129,6 +129,10 @@ def test_cli_quick_standin(tmp_path, capsys):
     assert (tmp_path / "standin" / "progression.png").exists()
     assert main(["compete", str(tmp_path / "no.toml")]) == 2
     assert "file not found" in capsys.readouterr().err
+    # --set overrides a config field, and a bad value is a one-line error naming it
+    assert main(["compete", str(CONFIG), "--set", "bounds.density_kg_m3=[2200.0, 1200.0]",
+                 "--out", str(tmp_path)]) == 2
+    assert "bounds.density_kg_m3" in capsys.readouterr().err
 
 
 def test_fig4_2_quick(tmp_path):

@@ -176,6 +176,12 @@ def test_cli_data_writes_tables(tmp_path, capsys):
     assert doc["fits"]["track_120psi"]["linear"]["a"] == pytest.approx(
         analyze().fits["track_120psi"].linear.a, rel=EXACT)
     assert "0.018806" in capsys.readouterr().out
+    # an output folder that cannot be made: one line naming it, no traceback
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    assert main(["data", "--out", str(blocker / "sub")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "jtire data: error: cannot read or write" in err[0] and "a_file" in err[0]
 
 
 @pytest.mark.parametrize("script", ["fig3_5_track_rrc.py", "fig3_7_sandbox_rrc.py"])
