@@ -21,7 +21,7 @@ import numpy as np
 import scipy.signal
 
 from jtire.errors import ConfigError
-from jtire.spectra import ResultMixin, check_signal, fit_modes
+from jtire.spectra import ResultMixin, check_signal, fit_modes, from_time
 
 XI_FORMULAS = {
     "exact": "xi = delta / sqrt(4 pi^2 + delta^2)",
@@ -65,12 +65,7 @@ def peaks(t, x, minima=False, t_start=None, prominence=None, distance_s=None):
     minimum time between peaks of one kind (s); noise makes several local maxima near each true
     peak, and this keeps only the highest. End samples are never peaks. Returns Peaks.
     """
-    t, x = check_signal(t, x)
-    if t_start is not None:
-        keep = t >= t_start
-        if keep.sum() < 3:
-            raise ConfigError(f"t_start = {t_start:g}: leaves {keep.sum()} samples, need >= 3")
-        t, x = t[keep], x[keep]
+    t, x = from_time(*check_signal(t, x), t_start, 3)
     dist = None
     if distance_s is not None:
         dist = max(1, int(distance_s / float(np.median(np.diff(t)))))

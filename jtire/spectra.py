@@ -65,6 +65,17 @@ def check_signal(t, y, name_t="t", name_y="y", min_len=3):
     return t, y
 
 
+def from_time(t, y, t_start, min_len):
+    """The samples at t >= t_start (all of them when t_start is None); ConfigError if fewer
+    than min_len remain."""
+    if t_start is None:
+        return t, y
+    keep = t >= t_start
+    if keep.sum() < min_len:
+        raise ConfigError(f"t_start = {t_start:g}: leaves {keep.sum()} samples, need >= {min_len}")
+    return t[keep], y[keep]
+
+
 def uniform_step(t, name="t") -> float:
     """The sampling step of a uniformly sampled time axis (s); ConfigError if not uniform."""
     dt = np.diff(t)
@@ -275,12 +286,7 @@ def first_mode(t, y, f_band=None, pad_to_resolution=0.01, t_start=None, n_modes=
     hundred least-squares passes over all N samples: decimate very long records first.
     Returns SpectrumResult.
     """
-    t, y = check_signal(t, y)
-    if t_start is not None:
-        keep = t >= t_start
-        if keep.sum() < 8:
-            raise ConfigError(f"t_start = {t_start:g}: leaves {keep.sum()} samples, need >= 8")
-        t, y = t[keep], y[keep]
+    t, y = from_time(*check_signal(t, y), t_start, 8)
     dt = uniform_step(t)
     fs, n = 1.0 / dt, t.size
     band = _check_band(f_band, fs) or (min(2.0 * fs / n, fs / 2), fs / 2)

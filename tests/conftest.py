@@ -35,3 +35,14 @@ def protocol():
 
     return Protocol.from_dict(dict(settle_damping=300.0, ke_tol=1e-3, inflate_ramp=0.04, inflate_max=0.4,
                                    load_ramp=0.1, settle_max=0.5))
+
+
+@pytest.fixture(scope="session")
+def short_protocol():
+    """A shorter load ramp and settle than `protocol`, for the dynamic-experiment tests on the
+    coarse ring: its belt modes are > 25 Hz and near-critically damped while settling, so a
+    50 ms ramp is still quasi-static."""
+    from jtire.experiments.phases import Protocol
+
+    return Protocol.from_dict(dict(settle_damping=300.0, ke_tol=1e-3, inflate_ramp=0.04, inflate_max=0.4,
+                                   load_ramp=0.05, settle_max=0.3))

@@ -17,7 +17,7 @@ import pytest
 from jtire import solve
 from jtire import units as U
 from jtire.errors import ConfigError
-from jtire.experiments import drop, phases
+from jtire.experiments import drop
 from jtire.experiments.registry import REGISTRY
 from jtire.physics.contact import RAMP_EPS
 
@@ -35,9 +35,8 @@ TOL_RETURN = 0.05  # of y_ss: the rim returns to its pre-load position when the 
 
 
 @pytest.fixture(scope="module")
-def proto():
-    return phases.Protocol.from_dict(dict(settle_damping=300.0, ke_tol=1e-3, inflate_ramp=0.04, inflate_max=0.4,
-                                          load_ramp=0.05, settle_max=0.3))
+def proto(short_protocol):
+    return short_protocol
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from jtire import units as U
-from jtire.experiments import phases, sidewall
+from jtire.experiments import sidewall
 from jtire.experiments.registry import REGISTRY
 from jtire.run_cli import REPO, load_run_config
 from jtire.signals import free_decay
@@ -45,11 +45,8 @@ class NoLoad(dict):
 
 
 @pytest.fixture(scope="module")
-def proto():
-    # a shorter load ramp than the default (the belt modes are > 25 Hz and near-critically
-    # damped while settling, so 50 ms is still quasi-static)
-    return phases.Protocol.from_dict(dict(settle_damping=300.0, ke_tol=1e-3, inflate_ramp=0.04, inflate_max=0.4,
-                                          load_ramp=0.05, settle_max=0.3))
+def proto(short_protocol):
+    return short_protocol
 
 
 @pytest.fixture(scope="module")
