@@ -17,9 +17,10 @@ tire moving at -x with the road. `contact_force` is the road's force on the tire
 
 Two readings of the rolling resistance (physics notes): the hub force (steady mean of -F_x) and the
 lost power over the speed (the model's own losses, smooth: Maxwell branches and tread normal
-damping, `dissipated`, plus sliding in the patch, `friction_work`). The hub force is noisy (polygon effect, the wheel's rotational modes on the
-tread's shear stiffness): on the default tire at 38.7-45.4 kN its standard deviation is 45-75 N
-around a 200-240 N mean, and an 80 ms mean carries a block standard error of 3-7 N (1.5-3 %).
+damping, `dissipated`, plus sliding in the patch, `friction_work`). The hub force is noisy
+(polygon effect, the wheel's rotational modes on the tread's shear stiffness): on the default
+tire at 38.7-45.4 kN its standard deviation is 45-75 N around a 200-240 N mean, and an 80 ms
+mean carries a block standard error of 3-7 N (1.5-3 %).
 In steady state the road's power -F_x V equals the rubber's dissipated power plus the friction
 (micro-slip) loss in the patch; their relative difference is the energy-balance check. (Before
 the friction counter existed the drag exceeded the rubber's P / V alone by +2.4 % at all three

@@ -49,8 +49,8 @@ def evaluate(model, params, drive, t, y):
     p = drive.pressure(t)
     k_n, k_t, _ = model.contact_stiffness(params)
     c_n = params.tread_loss * k_n / OMEGA_REF
-    F, bristle, F_n, gap, p_tread, p_slide = contact_forces(drive.surface, P, Pdot, t, y.bristle, k_n, k_t, c_n,
-                                                   params.friction, drive.dt)
+    F, bristle, F_n, gap, p_tread, p_slide = contact_forces(drive.surface, P, Pdot, t, y.bristle, k_n, k_t,
+                                                            c_n, params.friction, drive.dt)
     ((fx, fq),) = jax.linear_transpose(lin, Y)((-sigma, p, F))
 
     # dynamic-relaxation damping on velocities relative to the rim frame (alpha = 1: the rim
