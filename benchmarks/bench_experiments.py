@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 import jtire  # noqa: F401  (float64)
-from jtire.run_cli import run_config
+from jtire.cli.run import run_config
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIGS = REPO / "configs" / "experiments"

@@ -29,7 +29,7 @@ def main(argv=None):
     from jtire.experiments import static
     from jtire.experiments.phases import Protocol
     from jtire.config import load_tire
-    from jtire.run_cli import load_run_config
+    from jtire.cli.run import load_run_config
     from jtire.tire import make_tire
 
     spec0, exps, cond, proto = load_run_config(REPO / "configs" / "experiments" / "vertical_stiffness.toml")

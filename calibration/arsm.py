@@ -28,9 +28,9 @@ it returns, and a killed run resumes by replaying the file (the loop is determin
 
 import numpy as np
 
-from calibration.history import BudgetExhausted, Evaluator, OptimizeResult
-from jtire.errors import ConfigError
-from surrogates import (
+from .history import BudgetExhausted, Evaluator, OptimizeResult
+from ..errors import ConfigError
+from ..surrogates import (
     Region,
     arsm_update,
     as_bounds,

@@ -25,15 +25,15 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from calibration import arsm, baselines
-from calibration.history import best_so_far
-from jtire.errors import ConfigError
-from jtire.io import atomic_savefig, atomic_write_csv, atomic_write_json
+from . import arsm, baselines
+from .history import best_so_far
+from ..errors import ConfigError
+from ..io import atomic_savefig, atomic_write_csv, atomic_write_json
 
 __all__ = ["METHODS", "CompetitionSpec", "load_config", "soil_objective", "standin_objective",
            "fingerprint",
            "run_competition", "summarize", "calls_to_reach", "format_table", "plot_progression",
-           "write_outputs", "add_arguments", "run_cli"]
+           "write_outputs"]
 
 METHODS = {
     "arsm": arsm.minimize,
@@ -132,7 +132,7 @@ def load_config(path) -> dict:
 
 def soil_objective(cfg: dict):
     """The study's objective: |simulated - Bekker sinkage| / Bekker sinkage * 100 (percent)."""
-    from calibration import soil  # the finite-element model; imported only when used
+    from . import soil  # the finite-element model; imported only when used
 
     return soil.sinkage_objective(soil.SoilSpec.from_config(cfg.get("soil", {})))
 
@@ -145,7 +145,7 @@ def standin_objective(cfg: dict):
     z = S0 (rho / 1200)^-0.25 / E with S0 = 44.5 kN/m (the FE model's value at 1200 kg/m^3
     within a few percent), so the error surface has the same valley E*(rho).
     """
-    from calibration import soil  # only for the Bekker target (cheap, closed form)
+    from . import soil  # only for the Bekker target (cheap, closed form)
 
     target = soil.SoilSpec.from_config(cfg.get("soil", {})).target_sinkage_m
 
@@ -337,47 +337,3 @@ def write_outputs(results: dict, spec: CompetitionSpec, out_dir, title: str) -> 
                                    {k: [r[k] for r in summary] for k in summary[0]})
     fig = plot_progression(results, spec, out_dir / "progression.png", title)
     return {"runs_csv": runs_csv, "summary_csv": summary_csv, "figure": fig, "summary": summary}
-
-
-def add_arguments(parser):
-    parser.add_argument("config", metavar="CONFIG", help="competition TOML, e.g. "
-                        "configs/calibration/soil_competition.toml")
-    parser.add_argument("--out", default="runs/compete", help="output folder (resumes from it)")
-    parser.add_argument("--seeds", type=int, default=None, help="seeds per method (config: 20)")
-    parser.add_argument("--budget", type=int, default=None, help="calls per run (config: 50)")
-    parser.add_argument("--quick", action="store_true",
-                        help=f"{QUICK_SEEDS} seeds, {QUICK_BUDGET} calls (a smoke run)")
-    parser.add_argument("--methods", default=None,
-                        help="comma-separated subset, e.g. arsm,ga (config: all it lists)")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a config field, e.g. --set soil.pressure_Pa=80000 (repeatable)")
-    parser.add_argument("--objective", choices=("soil", "standin"), default="soil",
-                        help="soil: the finite-element plate test (default); standin: a "
-                        "closed-form stand-in for quick checks, not physics")
-
-
-def run_cli(args, say) -> int:
-    from jtire.config import apply_overrides
-
-    cfg = apply_overrides(load_config(args.config), args.set)
-    comp = dict(cfg.get("competition", {}))
-    if args.quick:
-        comp.update(seeds=QUICK_SEEDS, budget=QUICK_BUDGET)
-    if args.seeds is not None:
-        comp["seeds"] = args.seeds
-    if args.budget is not None:
-        comp["budget"] = args.budget
-    if args.methods:
-        comp["methods"] = [m.strip() for m in args.methods.split(",") if m.strip()]
-    spec = CompetitionSpec.from_config({**cfg, "competition": comp})
-    objective = (soil_objective if args.objective == "soil" else standin_objective)(cfg)
-    out = Path(args.out) / args.objective
-    results = run_competition(objective, spec, out, fingerprint=fingerprint(cfg, args.objective))
-    what = ("soil plate test (FE)" if args.objective == "soil"
-            else "CLOSED-FORM STAND-IN objective, not the soil FE model")
-    title = (f"Optimizer competition, sinkage error: {what}\n{spec.seeds} seeds x "
-             f"{spec.budget} calls; median and quartiles; stars: the study's single runs")
-    paths = write_outputs(results, spec, out, title)
-    say(format_table(paths["summary"], spec))
-    say(f"wrote {paths['runs_csv']}, {paths['summary_csv']}, {paths['figure']}")
-    return 0

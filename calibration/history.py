@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jtire.errors import ConfigError, SimulationError
-from jtire.io import append_jsonl, read_jsonl
+from ..errors import ConfigError, SimulationError
+from ..io import append_jsonl, read_jsonl
 
 __all__ = ["BudgetExhausted", "Evaluator", "OptimizeResult", "load_history", "best_so_far"]
 

@@ -34,9 +34,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-import jtire  # noqa: F401  (float64)
-from calibration.soil_mesh import block_tridiagonal_solve, build_mesh
-from jtire.errors import ConfigError, SimulationError
+from .soil_mesh import block_tridiagonal_solve, build_mesh
+from ..errors import ConfigError, SimulationError
 
 # Suggested search box for the competition (see `suggested_bounds`): dry-to-saturated soil
 # densities and E of a soft, deformable sandbox soil. With the default spec the zero-error valley

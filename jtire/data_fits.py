@@ -28,9 +28,10 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from jtire.errors import ConfigError
+from .errors import ConfigError
+from .resources import configs_dir
 
-DEFAULT_REFERENCE = Path(__file__).resolve().parents[1] / "configs" / "reference_xone_xda.toml"
+DEFAULT_REFERENCE = configs_dir() / "reference_xone_xda.toml"
 
 
 @dataclasses.dataclass(frozen=True)

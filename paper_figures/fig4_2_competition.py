@@ -22,7 +22,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-from calibration.competition import (  # noqa: E402
+from jtire.calibration.competition import (  # noqa: E402
     QUICK_BUDGET,
     QUICK_SEEDS,
     CompetitionSpec,

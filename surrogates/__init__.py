@@ -5,7 +5,7 @@ Everything works in unit coordinates of the design box; `to_unit` / `to_bounds` 
 physical bounds. Importing does no numerical work.
 """
 
-from surrogates.doe import (
+from .doe import (
     as_bounds,
     central_composite,
     latin_hypercube,
@@ -15,8 +15,8 @@ from surrogates.doe import (
     to_bounds,
     to_unit,
 )
-from surrogates.quadratic import QuadraticSurface, fit_quadratic, n_terms
-from surrogates.region import Region, arsm_update, inherit, safeguard, second_best, srsm_update
+from .quadratic import QuadraticSurface, fit_quadratic, n_terms
+from .region import Region, arsm_update, inherit, safeguard, second_best, srsm_update
 
 __all__ = [
     "as_bounds",

@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 from scipy.stats import qmc
 
-from jtire.errors import ConfigError
+from ..errors import ConfigError
 
 __all__ = [
     "as_bounds",

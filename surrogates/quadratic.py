@@ -17,8 +17,8 @@ import dataclasses
 
 import numpy as np
 
-from jtire.errors import ConfigError
-from surrogates.doe import sobol
+from ..errors import ConfigError
+from .doe import sobol
 
 __all__ = ["QuadraticSurface", "fit_quadratic", "n_terms"]
 

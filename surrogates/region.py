@@ -24,8 +24,8 @@ import dataclasses
 
 import numpy as np
 
-from jtire.errors import ConfigError
-from surrogates.doe import sobol
+from ..errors import ConfigError
+from .doe import sobol
 
 __all__ = ["Region", "second_best", "inherit", "arsm_update", "srsm_update", "safeguard"]
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import jtire  # noqa: F401  (float64)
-from calibration.competition import (
+from jtire.calibration.competition import (
     CompetitionSpec,
     calls_to_reach,
     fingerprint,
@@ -19,7 +19,7 @@ from calibration.competition import (
     summarize,
     write_outputs,
 )
-from calibration.history import OptimizeResult
+from jtire.calibration.history import OptimizeResult
 from jtire.errors import ConfigError
 
 REPO = Path(__file__).resolve().parents[1]
@@ -150,7 +150,7 @@ def test_arsm_meets_the_issue_goal_on_the_fe_soil_model(cfg, tmp_path):
     """The goal of the competition: over 20 seeds on the FE soil block (not the stand-in), the
     median ARSM run reaches 0.18 % sinkage error in at most 24 calls (the study's single run).
     Measured: 21.5 calls (quartiles 18, 24.8), every seed reaching it; ~35 s for 1000 calls."""
-    from calibration.competition import soil_objective
+    from jtire.calibration.competition import soil_objective
 
     spec = _spec(cfg, methods=["arsm"])
     assert spec.seeds == 20 and spec.budget == 50

@@ -6,7 +6,7 @@ from jtire import units as U
 from jtire.cli import main
 from jtire.config import load_tire
 from jtire.errors import ConfigError
-from jtire.run_cli import load_run_config
+from jtire.cli.run import load_run_config
 
 from .conftest import REPO, TIRE_TOML
 

@@ -61,7 +61,7 @@ def test_reduce_cornering_needs_three_angles_in_range():
 
 @pytest.mark.parametrize("name", ["cornering", "relaxation_length"])
 def test_configs_parse(name):
-    from jtire.run_cli import load_run_config
+    from jtire.cli.run import load_run_config
 
     _, exps, cond, _ = load_run_config(CONFIGS / f"{name}.toml")
     (exp, table), = exps
@@ -79,7 +79,7 @@ def test_bad_range_rejected_before_simulating():
 
 
 def test_config_rejects_out_of_range_angle():
-    from jtire.run_cli import load_run_config
+    from jtire.cli.run import load_run_config
 
     with pytest.raises(ConfigError, match="slip_angles_deg"):
         load_run_config(CONFIGS / "cornering.toml", ["cornering.slip_angles_deg=[0, 45]"])

@@ -15,7 +15,7 @@ from jtire.experiments import drum_cleat, static, traction
 from jtire.experiments.phases import Protocol, flat_road
 from jtire.experiments.registry import REGISTRY
 from jtire.physics import drum as dm
-from jtire.run_cli import load_run_config
+from jtire.cli.run import load_run_config
 from jtire.state import TireState
 from jtire.tire import make_tire
 

@@ -117,7 +117,7 @@ def test_calibration_target_lookup():
 
 # ---- config ---------------------------------------------------------------------------------
 def test_config_parses_to_si():
-    from jtire.run_cli import load_run_config
+    from jtire.cli.run import load_run_config
 
     spec, exps, cond, _ = load_run_config(CONFIG)
     (exp, table), = exps
@@ -131,7 +131,7 @@ def test_config_parses_to_si():
                                              ("rolling_resistance.measure_s=100", "measure_s"),
                                              ("rolling_resistance.nonsense=1", "nonsense")])
 def test_config_rejects_bad_fields(override, field):
-    from jtire.run_cli import load_run_config
+    from jtire.cli.run import load_run_config
 
     with pytest.raises(ConfigError, match=field):
         load_run_config(CONFIG, [override])

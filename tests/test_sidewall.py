@@ -16,7 +16,9 @@ import pytest
 from jtire import units as U
 from jtire.experiments import sidewall
 from jtire.experiments.registry import REGISTRY
-from jtire.run_cli import REPO, load_run_config
+from jtire.cli.run import load_run_config
+
+from .conftest import REPO
 from jtire.signals import free_decay
 
 P_HI, P_LO = 120 * U.PSI, 80 * U.PSI

@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from calibration.soil import (
+from jtire.calibration.soil import (
     SoilSpec,
     bekker_sinkage,
     simulate_sinkage,
@@ -19,7 +19,7 @@ from calibration.soil import (
     _layout,
     _solver,
 )
-from calibration.soil_mesh import block_tridiagonal_solve
+from jtire.calibration.soil_mesh import block_tridiagonal_solve
 from jtire.errors import ConfigError, SimulationError
 
 REFERENCE = Path(__file__).resolve().parents[1] / "configs" / "reference_xone_xda.toml"

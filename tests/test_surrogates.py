@@ -5,7 +5,7 @@ import pytest
 
 import jtire  # noqa: F401  (float64)
 from jtire.errors import ConfigError
-from surrogates import (
+from jtire.surrogates import (
     Region,
     arsm_update,
     as_bounds,

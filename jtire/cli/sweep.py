@@ -13,10 +13,10 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from . import units as U
-from .config import F, validate_table
-from .errors import ConfigError
-from .io import atomic_write_csv
+from .. import units as U
+from ..config import F, validate_table
+from ..errors import ConfigError
+from ..io import atomic_write_csv
 
 GRID_SCHEMA = {
     "loads_kg": F(list, U.G0, 1, 50000, [2312.5, 4625.0, 6937.5], "kg"),
@@ -41,13 +41,13 @@ def add_arguments(p):
 
 
 def run_cli(args, say) -> int:
-    from .config import load_toml
-    from .experiments.phases import Protocol
-    from .run_cli import load_run_config, table_lines
-    from .sweep import VMAPPED, run_static_batch
-    from .tire import make_tire
+    from ..config import load_toml
+    from ..experiments.phases import Protocol
+    from .run import load_run_config, table_lines
+    from ..sweep import VMAPPED, run_static_batch
+    from ..tire import make_tire
 
-    from .config import apply_overrides
+    from ..config import apply_overrides
 
     raw = apply_overrides(load_toml(args.config), [o for o in args.overrides if o.startswith("sweep.")])
     conditions = grid_conditions(raw.pop("sweep", {}))

@@ -10,18 +10,16 @@ file, `tire.<section>.<key>=...` for the tire file (e.g. `tire.mesh.n_theta=48`)
 import math
 from pathlib import Path
 
-from .config import apply_overrides, load_toml, parse_condition, parse_solver, tire_from_dict, validate_table
-from .errors import ConfigError
-from .io import atomic_write_csv
+from ..config import apply_overrides, load_toml, parse_condition, parse_solver, tire_from_dict, validate_table
+from ..errors import ConfigError
+from ..io import atomic_write_csv
 
-REPO = Path(__file__).resolve().parents[1]
-DEFAULT_CONFIG = REPO / "configs" / "default.toml"
 TOP_KEYS = {"experiment", "experiments", "tire_file", "condition", "solver", "description", "sweep"}
 
 
 def load_run_config(path, overrides=()):
     """Parse an experiment config (+ overrides) -> (tire spec, [(Experiment, table)], condition, protocol dict)."""
-    from .experiments.registry import REGISTRY
+    from ..experiments.registry import REGISTRY
 
     path = Path(path)
     raw = load_toml(path)
@@ -48,8 +46,8 @@ def load_run_config(path, overrides=()):
 
 def run_config(path, overrides=(), progress=None):
     """Run every experiment of a config; returns the list of ExperimentResults."""
-    from .experiments.phases import Protocol
-    from .tire import make_tire
+    from ..experiments.phases import Protocol
+    from ..tire import make_tire
 
     spec, exps, condition, proto = load_run_config(path, overrides)
     tire = make_tire(spec)
@@ -88,7 +86,7 @@ def table_lines(res) -> list:
 
 
 def add_arguments(p):
-    p.add_argument("config", nargs="?", default=str(DEFAULT_CONFIG),
+    p.add_argument("config", nargs="?", default=None,
                    help="experiment config TOML (default: configs/default.toml, the static experiments at rated load and pressure)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config field, e.g. condition.pressure_psi=70 or tire.mesh.n_theta=48")
@@ -97,7 +95,9 @@ def add_arguments(p):
 
 def run_cli(args, say) -> int:
 
-    results = run_config(args.config, args.overrides, progress=lambda n: say(f"running {n} ...", err=True))
+    from ..resources import config_path
+
+    results = run_config(args.config or config_path("default.toml"), args.overrides, progress=lambda n: say(f"running {n} ...", err=True))
     for res in results:
         say("\n".join(table_lines(res)))
     if args.out:

@@ -1,6 +1,6 @@
 """The `jtire` command line: `jtire run | sweep | compete | data` (calibration and sampling: not yet).
 
-Each subcommand lives in the module that owns its work; this file only wires them together, and
+One module per subcommand in this package (`jtire.cli.run`, ...); this file only wires them together, and
 turns every expected failure (a bad config, an unstable simulation) into one line on stderr and a
 non-zero exit. Library modules never print; this is the only place that writes to the terminal.
 """
@@ -15,10 +15,10 @@ import sys
 # stdout, `say(text, err=True)` to stderr): this file is the one place that prints.
 # Imports are lazy so `jtire --help` is instant.
 SUBCOMMANDS = {
-    "run": ("jtire.run_cli", "run virtual experiments from a TOML config (default: the static experiments at rated)"),
-    "sweep": ("jtire.sweep_cli", "run an experiment over the load x pressure grid (vmapped)"),
-    "compete": ("calibration.competition", "ARSM vs GA vs Monte Carlo on the soil-block simulation"),
-    "data": ("jtire.data", "measured test-track and sandbox rolling-resistance tables and fits"),
+    "run": ("jtire.cli.run", "run virtual experiments from a TOML config (default: the static experiments at rated)"),
+    "sweep": ("jtire.cli.sweep", "run an experiment over the load x pressure grid (vmapped)"),
+    "compete": ("jtire.cli.compete", "ARSM vs GA vs Monte Carlo on the soil-block simulation"),
+    "data": ("jtire.cli.data", "measured test-track and sandbox rolling-resistance tables and fits"),
 }
 
 
