@@ -1,9 +1,11 @@
 """TOML configs -> frozen, validated, SI specs. The only place where units are converted.
 
 A config is a tire file (`configs/tires/*.toml`) and an experiment file
-(`configs/experiments/*.toml`) that names it. Every field is declared below with its type, its
-unit and its allowed range; anything else (an unknown key, a wrong type, a value out of range, a
-missing field) is a `ConfigError` naming the field and what is allowed, in one line.
+(`configs/experiments/*.toml`) that names it. Every field is declared with its type, its unit and
+its allowed range (`jtire.schema.Field`; experiment tables are declared by the experiments);
+anything else (an unknown key, a wrong type, a value out of range, a missing field, an
+inconsistent pair of fields) is a `ConfigError` naming the field and what is allowed, in one line.
+Every input file is read through `read_toml` (decode and parse errors name the file and line).
 Overrides: `apply_overrides(raw, ["condition.pressure_psi=70"])` sets fields by dotted path
 before validation, so they are checked exactly like the file.
 """
@@ -16,119 +18,76 @@ from pathlib import Path
 from . import units as U
 from .errors import ConfigError
 from .mesh import PART_NAMES, Geometry, MassTargets
-
-
-@dataclasses.dataclass(frozen=True)
-class F:
-    """A field: python type, SI factor, allowed range in the file's unit, default (None = required)."""
-
-    type: type
-    factor: float = 1.0
-    lo: float = -math.inf
-    hi: float = math.inf
-    default: object = None
-    unit: str = ""
-
-    def parse(self, path, value):
-        if self.type is float and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
-        if self.type is list:
-            if not isinstance(value, list) or not all(isinstance(v, (int, float)) for v in value) or not value:
-                raise ConfigError(f"{path} = {value!r}: must be a non-empty list of numbers{self._range()}")
-            for v in value:
-                self._check_range(path, float(v))
-            return tuple(float(v) * self.factor for v in value)
-        if not isinstance(value, self.type) or (self.type is int and isinstance(value, bool)):
-            raise ConfigError(f"{path} = {value!r}: must be {self.type.__name__}{self._range()}")
-        if self.type in (int, float):
-            self._check_range(path, float(value))
-            return value * self.factor if self.type is float else value
-        return value
-
-    def _check_range(self, path, v):
-        if not (self.lo <= v <= self.hi) or math.isnan(v):
-            raise ConfigError(f"{path} = {v:g}: must be in [{self.lo:g}, {self.hi:g}]{' ' + self.unit if self.unit else ''}")
-
-    def _range(self):
-        if self.type in (int, float, list) and (self.lo > -math.inf or self.hi < math.inf):
-            return f" in [{self.lo:g}, {self.hi:g}]{' ' + self.unit if self.unit else ''}"
-        return ""
+from .schema import Field, validate
 
 
 def mm(lo, hi, default=None):
-    return F(float, U.MM, lo, hi, default, "mm")
+    return Field(float, U.MM, lo, hi, default, "mm")
 
 
 def mpa(lo, hi, default=None):
-    return F(float, U.MPA, lo, hi, default, "MPa")
+    return Field(float, U.MPA, lo, hi, default, "MPa")
 
 
 PART_SCHEMA = {
     "E_meridional_MPa": mpa(0.1, 2e5), "E_circumferential_MPa": mpa(0.1, 2e5), "G_shear_MPa": mpa(0.01, 2e4),
-    "E_bending_MPa": mpa(0.1, 2e5), "thickness_mm": mm(0.5, 100), "loss": F(float, 1, 0, 2, None, "(loss tangent)"),
+    "E_bending_MPa": mpa(0.1, 2e5), "thickness_mm": mm(0.5, 100), "loss": Field(float, 1, 0, 2, None, "(loss tangent)"),
 }
 
 TIRE_SCHEMA = {
     "tire": {
-        "size": F(str, default=""), "rim_diameter_mm": mm(200, 2000), "rim_width_mm": mm(50, 1000),
+        "size": Field(str, default=""), "rim_diameter_mm": mm(200, 2000), "rim_width_mm": mm(50, 1000),
         "flange_height_mm": mm(0, 100), "section_width_mm": mm(50, 1000), "section_height_mm": mm(30, 800),
         "outer_diameter_mm": mm(300, 4000), "tread_depth_mm": mm(1, 100), "tread_width_mm": mm(20, 1000),
         "belt_width_mm": mm(20, 1000), "crown_radius_mm": mm(50, 1e5),
     },
     "mass": {
-        "tire_kg": F(float, 1, 1, 1e4, unit="kg"), "belt_kg": F(float, 1, 0.1, 1e4, unit="kg"),
-        "rim_kg": F(float, 1, 0.1, 1e4, unit="kg"), "rim_Iy_kgm2": F(float, 1, 1e-3, 1e4, unit="kg m^2"),
-        "rim_Ixz_kgm2": F(float, 1, 1e-3, 1e4, unit="kg m^2"),
+        "tire_kg": Field(float, 1, 1, 1e4, unit="kg"), "belt_kg": Field(float, 1, 0.1, 1e4, unit="kg"),
+        "rim_kg": Field(float, 1, 0.1, 1e4, unit="kg"), "rim_Iy_kgm2": Field(float, 1, 1e-3, 1e4, unit="kg m^2"),
+        "rim_Ixz_kgm2": Field(float, 1, 1e-3, 1e4, unit="kg m^2"),
     },
     "mesh": {
-        "n_theta": F(int, 1, 16, 1024), "n_side": F(int, 1, 5, 100), "n_crown": F(int, 1, 4, 100),
-        "contact_subpoints": F(int, 1, 1, 8),
+        "n_theta": Field(int, 1, 16, 1024), "n_side": Field(int, 1, 5, 100), "n_crown": Field(int, 1, 4, 100),
+        "contact_subpoints": Field(int, 1, 1, 8),
     },
     "parts": {name: PART_SCHEMA for name in PART_NAMES},
     "undertread": {"E_MPa": mpa(0.1, 1e3), "thickness_mm": mm(0.1, 50)},
-    "tread": {"E_MPa": mpa(0.1, 1e3), "G_MPa": mpa(0.01, 1e3), "loss": F(float, 1, 0, 2), "friction": F(float, 1, 0, 3)},
-    "viscoelastic": {"relaxation_times_ms": F(list, U.MS, 1e-3, 1e4, unit="ms")},
+    "tread": {"E_MPa": mpa(0.1, 1e3), "G_MPa": mpa(0.01, 1e3), "loss": Field(float, 1, 0, 2), "friction": Field(float, 1, 0, 3)},
+    "viscoelastic": {"relaxation_times_ms": Field(list, U.MS, 1e-3, 1e4, unit="ms")},
     "reference": {  # measured values reported beside the simulated ones; never used by the physics
-        "belt_Iy_kgm2": F(float, 1, 0, 1e4, 0.0), "belt_Ix_kgm2": F(float, 1, 0, 1e4, 0.0),
+        "belt_Iy_kgm2": Field(float, 1, 0, 1e4, 0.0), "belt_Ix_kgm2": Field(float, 1, 0, 1e4, 0.0),
         "footprint_length_mm": mm(0, 5000, 0.0), "footprint_width_mm": mm(0, 5000, 0.0),
     },
 }
 
 
-def _validate(raw: dict, schema: dict, prefix: str = "") -> dict:
-    if not isinstance(raw, dict):
-        raise ConfigError(f"{prefix.rstrip('.') or 'config'}: must be a table")
-    out = {}
-    for key in raw:
-        if key not in schema:
-            allowed = ", ".join(sorted(schema))
-            raise ConfigError(f"{prefix}{key}: unknown field (allowed here: {allowed})")
-    for key, sub in schema.items():
-        path = prefix + key
-        if isinstance(sub, dict):
-            if key not in raw:
-                if all(isinstance(f, F) and f.default is not None for f in sub.values()):
-                    out[key] = _validate({}, sub, path + ".")
-                    continue
-                raise ConfigError(f"{path}: missing table")
-            out[key] = _validate(raw[key], sub, path + ".")
-        elif key in raw:
-            out[key] = sub.parse(path, raw[key])
-        elif sub.default is not None:
-            out[key] = sub.parse(path, sub.default)  # defaults are in the file's units too
-        else:
-            raise ConfigError(f"{path}: missing field{sub._range()}")
-    return out
-
-
-def load_toml(path) -> dict:
+def read_text(path, what: str = "config file") -> str:
+    """The text of an input file; a missing file, a folder, an unreadable or non-UTF-8 file is one
+    ConfigError line naming the file (and the byte where the decoding failed)."""
     path = Path(path)
+    if path.is_dir():
+        raise ConfigError(f"{path}: is a folder, not a {what}")
     if not path.is_file():
-        raise ConfigError(f"{path}: no such config file")
+        raise ConfigError(f"{path}: no such {what}")
     try:
-        return tomllib.loads(path.read_text())
+        return path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = path.read_bytes()[: e.start].count(b"\n") + 1
+        raise ConfigError(f"{path}: not UTF-8 text (byte 0x{e.object[e.start]:02x} at line {line})") from None
+    except OSError as e:
+        raise ConfigError(f"{path}: cannot read ({e.strerror or e})") from None
+
+
+def read_toml(path, what: str = "config file") -> dict:
+    """Parse a TOML input file (every config, tire, calibration and reference file goes through here)."""
+    text = read_text(path, what)
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ConfigError(f"{path}: not valid TOML ({e})") from None
+
+
+load_toml = read_toml
 
 
 def _coerce(text: str):
@@ -146,11 +105,13 @@ def apply_overrides(raw: dict, overrides) -> dict:
             raise ConfigError(f"--set {item!r}: must be KEY=VALUE, e.g. condition.pressure_psi=70")
         key, value = item.split("=", 1)
         parts = key.strip().split(".")
+        if not all(parts):
+            raise ConfigError(f"--set {item!r}: the key must be a dotted field name, e.g. condition.pressure_psi=70")
         d = raw
         for p in parts[:-1]:
             d = d.setdefault(p, {})
             if not isinstance(d, dict):
-                raise ConfigError(f"--set {key}: {p} is not a table")
+                raise ConfigError(f"--set {key.strip()}: {p} is not a table")
         d[parts[-1]] = _coerce(value.strip())
     return raw
 
@@ -178,7 +139,7 @@ class TireSpec:
 
 
 def tire_from_dict(raw: dict) -> TireSpec:
-    v = _validate(raw, TIRE_SCHEMA)
+    v = validate(raw, TIRE_SCHEMA)
     t = v["tire"]
     geometry = Geometry(
         rim_radius=t["rim_diameter_mm"] / 2, rim_width=t["rim_width_mm"], flange_height=t["flange_height_mm"],
@@ -217,19 +178,20 @@ def load_tire(path, overrides=()) -> TireSpec:
 
 # ---- experiment configs ------------------------------------------------------------------------
 CONDITION_SCHEMA = {
-    "load_kg": F(float, U.G0, 0, 50000, None, "kg of load"), "load_kN": F(float, U.KN, 0, 500, None, "kN"),
-    "load_lbs": F(float, U.LBF, 0, 110000, None, "lbs"),
-    "pressure_psi": F(float, U.PSI, 10, 250, None, "psi"), "pressure_kPa": F(float, 1e3, 70, 1700, None, "kPa"),
-    "pressure_bar": F(float, 1e5, 0.7, 17, None, "bar"),
+    # loads below ~50 kg deflect a truck tire by well under a millimetre: no experiment resolves them
+    "load_kg": Field(float, U.G0, 50, 50000, None, "kg of load"), "load_kN": Field(float, U.KN, 0.5, 500, None, "kN"),
+    "load_lbs": Field(float, U.LBF, 110, 110000, None, "lbs"),
+    "pressure_psi": Field(float, U.PSI, 10, 250, None, "psi"), "pressure_kPa": Field(float, 1e3, 70, 1700, None, "kPa"),
+    "pressure_bar": Field(float, 1e5, 0.7, 17, None, "bar"),
 }
 
 SOLVER_SCHEMA = {
-    "settle_damping_per_s": F(float, 1, 1, 1e4, 300.0, "1/s"),
-    "ke_tol_J": F(float, 1, 1e-9, 10, 1e-3, "J"),
-    "inflate_ramp_s": F(float, 1, 1e-3, 1, 0.04, "s"),
-    "inflate_max_s": F(float, 1, 0.01, 5, 0.4, "s"),
-    "load_ramp_s": F(float, 1, 1e-3, 5, 0.1, "s"),
-    "settle_max_s": F(float, 1, 0.01, 5, 0.5, "s"),
+    "settle_damping_per_s": Field(float, 1, 1, 1e4, 300.0, "1/s"),
+    "ke_tol_J": Field(float, 1, 1e-9, 10, 1e-3, "J"),
+    "inflate_ramp_s": Field(float, 1, 1e-3, 1, 0.04, "s"),
+    "inflate_max_s": Field(float, 1, 0.01, 5, 0.4, "s"),
+    "load_ramp_s": Field(float, 1, 1e-3, 5, 0.1, "s"),
+    "settle_max_s": Field(float, 1, 0.01, 5, 0.5, "s"),
 }
 
 
@@ -253,17 +215,99 @@ def parse_condition(raw: dict, need_load: bool = True) -> dict:
     if need_load:
         lk = _one_of(raw, ("load_kg", "load_kN", "load_lbs"), "vertical load", "condition")
         out["load_N"] = CONDITION_SCHEMA[lk].parse(f"condition.{lk}", raw[lk])
-        if out["load_N"] <= 0:
-            raise ConfigError(f"condition.{lk} = {raw[lk]}: must be > 0")
+    else:
+        for lk in ("load_kg", "load_kN", "load_lbs"):
+            if lk in raw:
+                CONDITION_SCHEMA[lk].parse(f"condition.{lk}", raw[lk])  # checked even when unused
     return out
 
 
 def parse_solver(raw: dict) -> dict:
-    v = _validate(raw or {}, SOLVER_SCHEMA, "solver.")
+    v = validate(raw or {}, SOLVER_SCHEMA, "solver.")
     return {"settle_damping": v["settle_damping_per_s"], "ke_tol": v["ke_tol_J"], "inflate_ramp": v["inflate_ramp_s"],
             "inflate_max": v["inflate_max_s"], "load_ramp": v["load_ramp_s"], "settle_max": v["settle_max_s"]}
 
 
 def validate_table(raw: dict, schema: dict, name: str) -> dict:
     """Validate an experiment's own table (e.g. [vertical_stiffness]) against its schema."""
-    return _validate(raw or {}, schema, name + ".")
+    return validate({} if raw is None else raw, schema, name + ".")
+
+
+# ---- run configs: an experiment file + its tire file -----------------------------------------------
+TOP_KEYS = {"experiment", "experiments", "tire_file", "condition", "solver", "description", "sweep"}
+
+
+@dataclasses.dataclass(frozen=True)
+class RunConfig:
+    """A validated run config: the tire, the experiments (each built from its table), the condition
+    (SI), the solver protocol (dict, SI), the raw [sweep] table, and the file it came from."""
+
+    tire: TireSpec
+    experiments: tuple  # of Experiment instances
+    condition: dict
+    solver: dict
+    sweep: dict
+    path: Path
+
+
+def experiment_names(raw: dict, path: Path, registry) -> list:
+    has_one, has_many = "experiment" in raw, "experiments" in raw
+    if has_one and has_many:
+        raise ConfigError(f"{path.name}: give experiment = NAME or experiments = [NAMES], not both")
+    names = raw.get("experiments", [raw["experiment"]] if has_one else None)
+    if isinstance(names, str):
+        names = [names]
+    if not names or not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise ConfigError(f"{path.name}: needs experiment = NAME or experiments = [NAMES] (known: {', '.join(registry)})")
+    for n in names:
+        if n not in registry:
+            raise ConfigError(f"experiment = {n!r}: unknown (known: {', '.join(registry)})")
+    if len(set(names)) != len(names):
+        raise ConfigError(f"experiments = {names}: each experiment at most once")
+    return names
+
+
+def load_run_config(path, overrides=(), registry=None) -> RunConfig:
+    """Parse an experiment config (+ `--set` overrides): every table is validated (the tables of
+    experiments the config does not run too), every experiment built, before anything runs.
+
+    Overrides `tire.<section>.<key>=v` go to the tire file; the others to the experiment file.
+    registry: name -> Experiment class (default `jtire.experiments.REGISTRY`).
+    """
+    from .experiments import REGISTRY
+    from .experiments.phases import Protocol
+
+    registry = REGISTRY if registry is None else registry
+    path = Path(path)
+    raw = read_toml(path)
+    tire_over = [o[len("tire."):] for o in overrides if o.startswith("tire.")]
+    apply_overrides(raw, [o for o in overrides if not o.startswith("tire.")])
+    names = experiment_names(raw, path, registry)
+    for key in raw:
+        if key not in TOP_KEYS and key not in registry:
+            raise ConfigError(f"{key}: unknown field (allowed: {', '.join(sorted(TOP_KEYS))} and experiment tables "
+                              f"{', '.join(registry)})")
+    if not isinstance(raw.get("description", ""), str):
+        raise ConfigError("description: must be a string")
+    if "tire_file" not in raw or not isinstance(raw["tire_file"], str):
+        raise ConfigError("tire_file: missing (path of the tire TOML, relative to this config)")
+    tire_path = (path.parent / raw["tire_file"]).resolve()
+    tire_raw = read_toml(tire_path, "tire file")
+    apply_overrides(tire_raw, tire_over)
+    try:
+        tire = tire_from_dict(tire_raw)
+    except ConfigError as e:
+        raise ConfigError(f"tire file {tire_path.name}: tire.{e}" if not str(e).startswith(str(tire_path)) else str(e)) from None
+    solver = parse_solver(raw.get("solver", {}))
+    proto = Protocol.from_dict(solver)
+    tables = {n: validate_table(raw.get(n, {}), registry[n].schema, n) for n in registry if n in raw or n in names}
+    exps = tuple(registry[n].from_table(tables[n], proto, tire) for n in names)
+    condition = parse_condition(raw.get("condition", {}), need_load=any(e.needs_load for e in exps))
+    for e in exps:
+        check = getattr(e, "check_condition", None)
+        if check is not None:
+            check(condition)
+    sweep = raw.get("sweep", {})
+    if not isinstance(sweep, dict):
+        raise ConfigError("sweep: must be a table")
+    return RunConfig(tire, exps, condition, solver, sweep, path)

@@ -98,3 +98,14 @@ def read_jsonl(path) -> list:
         except json.JSONDecodeError:
             break
     return out
+
+
+def check_writable(folder) -> Path:
+    """Make `folder` (and its parents) and check a file can be written there, before any work is
+    done; an OSError (reported by the CLI as one line) otherwise."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".write-check.", suffix=".tmp")
+    os.close(fd)
+    os.unlink(tmp)
+    return folder

@@ -44,6 +44,9 @@ def _say(text: str = "", err: bool = False) -> None:
 
 def build_parser():
     parser = argparse.ArgumentParser(prog="jtire", description=__doc__.splitlines()[0])
+    parser.add_argument("--no-cache", action="store_true",
+                        help="do not use the persistent compilation cache (default: on, in the user's cache folder; "
+                             "JTIRE_CACHE_DIR sets the folder)")
     sub = parser.add_subparsers(dest="command", required=True)
     for name, (mod, helptext) in _available().items():
         p = sub.add_parser(name, help=helptext, description=helptext)
@@ -59,6 +62,10 @@ def main(argv=None):
     args = parser.parse_args(argv)
     from jtire.errors import JtireError
 
+    if not args.no_cache:
+        from jtire import cache
+
+        cache.enable()
     try:
         return int(args._module.run_cli(args, _say) or 0)
     except JtireError as e:

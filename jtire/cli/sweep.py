@@ -1,89 +1,121 @@
-"""`jtire sweep CONFIG [--out DIR] [--batch N]`: one experiment over the load x pressure grid.
+"""`jtire sweep CONFIG [--out DIR] [--batch N]`: one experiment over a load x pressure grid.
 
 The grid comes from the config's [sweep] table (loads in kg, pressures in psi) or defaults to the
-study's 3 x 3 grid. Static experiments run vmapped (`jtire.sweep`), in batches of --batch cases;
-others run case by case (each phase compiled once and reused). Every finished case is written to
-DIR/cases/<case>/result.json at once, and a rerun with the same DIR skips finished cases, so a
-killed sweep resumes without losing work. DIR/summary.csv gathers every case's quantities.
+study's 3 x 3 grid (experiments where the load does not enter, E05/E07/E08, run once per pressure).
+All cases run through the batch runner (`jtire.batch`: vmapped, sharded over the devices) in
+batches of --batch cases (default: the whole grid). Every finished case is written to
+DIR/cases/<case>/result.json at once; DIR/settings.json holds everything that determines the numbers,
+so a rerun into DIR resumes (finished cases are not recomputed) only with the same settings and
+refuses otherwise. DIR/summary.csv gathers every case's quantities.
 """
 
 import json
-import sys
 from pathlib import Path
 
-from tqdm import tqdm
-
 from .. import units as U
-from ..config import F, validate_table
-from ..errors import ConfigError
-from ..io import atomic_write_csv
+from ..config import validate_table
+from ..errors import ConfigError, SimulationError
+from ..io import atomic_write_csv, atomic_write_text, check_writable
+from ..schema import Field
 
 GRID_SCHEMA = {
-    "loads_kg": F(list, U.G0, 1, 50000, [2312.5, 4625.0, 6937.5], "kg"),
-    "pressures_psi": F(list, U.PSI, 10, 250, [70.0, 120.0, 150.0], "psi"),
+    "loads_kg": Field(list, U.G0, 50, 50000, [2312.5, 4625.0, 6937.5], "kg"),
+    "pressures_psi": Field(list, U.PSI, 10, 250, [70.0, 120.0, 150.0], "psi"),
 }
 
 
-def grid_conditions(raw_sweep: dict):
+def grid_conditions(raw_sweep: dict, per_pressure: bool = False):
     g = validate_table(raw_sweep or {}, GRID_SCHEMA, "sweep")
+    for key in ("loads_kg", "pressures_psi"):
+        vals = g[key]
+        if len(set(vals)) != len(vals):
+            raise ConfigError(f"sweep.{key}: lists a value twice")
+    if per_pressure:
+        return [{"pressure_Pa": p} for p in g["pressures_psi"]]
     return [{"pressure_Pa": p, "load_N": w} for p in g["pressures_psi"] for w in g["loads_kg"]]
 
 
-def case_name(c):
-    return f"p{c['pressure_Pa'] / U.PSI:.0f}psi_l{c['load_N'] / U.G0:.0f}kg"
+def case_name(i: int, c: dict) -> str:
+    """Unique (the index comes first) and readable: 003_p120psi_l4625kg."""
+    name = f"{i:03d}_p{c['pressure_Pa'] / U.PSI:.4g}psi"
+    if "load_N" in c:
+        name += f"_l{c['load_N'] / U.G0:.6g}kg"
+    return name
 
 
 def add_arguments(p):
     p.add_argument("config", help="experiment config TOML (its [sweep] table sets the grid)")
-    p.add_argument("--out", default="runs/sweep", help="output folder (resumes if it holds finished cases)")
+    p.add_argument("--out", default="runs/sweep", help="output folder (resumes if it holds finished cases of the same settings)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
-    p.add_argument("--batch", type=int, default=9, help="cases per vmapped batch (default 9: the whole grid)")
+    p.add_argument("--batch", type=int, default=0, help="cases per batch (default 0: the whole grid at once)")
+
+
+def settings(rc, exp, conditions) -> dict:
+    from ..fingerprint import code_version
+
+    return {"experiment": exp.name, "table": exp, "tire": rc.tire, "solver": rc.solver, "conditions": conditions,
+            "jtire": code_version()}
 
 
 def run_cli(args, say) -> int:
-    from ..config import load_toml
-    from ..experiments.phases import Protocol
-    from .run import load_run_config, table_lines
-    from ..sweep import VMAPPED, run_static_batch
+    from tqdm import tqdm
+
+    from .. import batch
+    from ..config import load_run_config
+    from ..fingerprint import claim_folder
     from ..tire import make_tire
 
-    from ..config import apply_overrides
-
-    raw = apply_overrides(load_toml(args.config), [o for o in args.overrides if o.startswith("sweep.")])
-    conditions = grid_conditions(raw.pop("sweep", {}))
-    spec, exps, base_condition, proto = load_run_config(args.config, [o for o in args.overrides if not o.startswith("sweep.")])
-    if len(exps) != 1:
+    rc = load_run_config(args.config, args.overrides)
+    if len(rc.experiments) != 1:
         raise ConfigError("sweep: the config must name exactly one experiment")
-    exp, table = exps[0]
-    if args.batch < 1:
-        raise ConfigError(f"--batch {args.batch}: must be >= 1")
-    tire = make_tire(spec)
-    protocol = Protocol.from_dict(proto)
-    out = Path(args.out)
-    todo = [c for c in conditions if not (out / "cases" / case_name(c) / "result.json").exists()]
-    if len(todo) < len(conditions):
-        say(f"resuming: {len(conditions) - len(todo)} of {len(conditions)} cases already done in {out}", err=True)
-    bar = tqdm(total=len(todo), desc=f"sweep {exp.name}", unit="case", err=True)
-    while todo:
-        chunk = todo[: args.batch] if exp.name in VMAPPED else todo[:1]
-        todo = todo[len(chunk):]
-        if exp.name in VMAPPED:
-            results = run_static_batch(tire, chunk, protocol, exp.name, table)
-        else:
-            results = [exp.runner(tire, dict(c), protocol, **table) for c in chunk]
-        for c, res in zip(chunk, results):
-            res.write(out / "cases" / case_name(c))
-            bar.update(1)
-    bar.close()
-    rows, keys = [], []
+    exp = rc.experiments[0]
+    if args.batch < 0:
+        raise ConfigError(f"--batch {args.batch}: must be >= 0 (0: the whole grid in one batch)")
+    conditions = grid_conditions(rc.sweep, exp.per_pressure)
     for c in conditions:
-        d = json.loads((out / "cases" / case_name(c) / "result.json").read_text())
+        if hasattr(exp, "check_condition"):
+            exp.check_condition(c)
+    out = Path(args.out)
+    check_writable(out)
+    resumed = claim_folder(out, settings(rc, exp, conditions))
+    names = [case_name(i, c) for i, c in enumerate(conditions)]
+    todo = [i for i, n in enumerate(names) if not (out / "cases" / n / "result.json").exists()]
+    if resumed:
+        say(f"resuming: {len(conditions) - len(todo)} of {len(conditions)} cases already done in {out}", err=True)
+    failures = []
+    if todo:
+        tire = make_tire(rc.tire)
+        bar = tqdm(total=len(todo), desc=f"sweep {exp.name}", unit="case")
+
+        def save(k, res):
+            i = todo[k]
+            folder = out / "cases" / names[i]
+            if isinstance(res, batch.CaseFailure):
+                failures.append(f"{names[i]}: {res.error}")
+                atomic_write_text(folder / "error.txt", f"{res.error}\n")
+            else:
+                res.write(folder)
+                (folder / "error.txt").unlink(missing_ok=True)
+            bar.update(1)
+
+        batch.run(exp, tire, [conditions[i] for i in todo], batch=args.batch, on_result=save)
+        bar.close()
+    rows, keys = [], []
+    for i, c in enumerate(conditions):
+        f = out / "cases" / names[i] / "result.json"
+        if not f.exists():
+            continue
+        d = json.loads(f.read_text())
         q = {k: v for k, v in d["quantities"].items() if isinstance(v, (int, float)) or v is None}
         keys += [k for k in q if k not in keys]
-        rows.append((c, q))
-    header = ["pressure_Pa", "load_N"] + keys
-    atomic_write_csv(out / "summary.csv", header, [[c["pressure_Pa"], c["load_N"]] + [q.get(k) for k in keys] for c, q in rows])
-    for c, q in rows:
-        say(f"{case_name(c)}: " + ", ".join(f"{k}={v:.6g}" for k, v in q.items() if isinstance(v, (int, float))))
+        rows.append((names[i], c, q))
+    cols = ["case", "pressure_Pa"] + (["load_N"] if not exp.per_pressure else [])
+    atomic_write_csv(out / "summary.csv", cols + keys,
+                     [[n] + [c[k] for k in cols[1:]] + [q.get(k) for k in keys] for n, c, q in rows])
+    for n, c, q in rows:
+        say(f"{n}: " + ", ".join(f"{k}={v:.6g}" for k, v in q.items() if isinstance(v, (int, float))))
     say(f"summary written to {out / 'summary.csv'}")
+    if failures:
+        raise SimulationError(f"{len(failures)} of {len(conditions)} cases failed (rerun to retry them): "
+                              + "; ".join(failures))
     return 0

@@ -1,0 +1,151 @@
+"""One batch runner for every experiment: cases x parameter sets, vmapped, sharded over devices.
+
+`simulate_batch(exp, model, params, cases)` is the pure, traced program: the experiment's
+`simulate` vmapped over the leading axis of `cases` (and of `params` when it carries one), split
+over the devices with `shard_map` (each device runs its own share, its own loops: a case that settles
+early does not wait for another device's). It is compiled once per (experiment settings structure,
+mesh, batch shape, device count); JAX's persistent cache (`jtire.cache`) keeps it across processes.
+
+`run(exp, tire, conditions, ...)` is the host driver: it expands conditions into cases, computes the
+stable step of each case, runs the cases in batches (padded to a multiple of the device count),
+reduces every condition on the host as soon as its batch returns and hands each result to a
+callback (so sweeps save as they go). On a CPU the devices are host devices: `jtire` asks JAX for
+one per core at import (`JTIRE_CPU_DEVICES` overrides). On a GPU it runs unchanged over
+`jax.devices()`. Several hosts (`jax.distributed`) are not supported: see the README.
+"""
+
+import dataclasses
+import time
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import Mesh, PartitionSpec
+
+from . import solve
+from .errors import JtireError
+from .experiments.phases import Case
+
+
+def _stack(trees):
+    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *trees)
+
+
+def _index(tree, i):
+    return jax.tree_util.tree_map(lambda a: a[i], tree)
+
+
+def simulate_batch(exp, model, params, cases: Case, *, n_devices: int = 1, params_batched: bool = False):
+    """Traced: exp.simulate for every case (leading axis of `cases`; of `params` too when
+    params_batched). The batch size must be a multiple of n_devices."""
+    def local(p, c):
+        return jax.vmap(lambda pp, cc: exp.simulate(model, pp, cc), in_axes=(0 if params_batched else None, 0))(p, c)
+
+    if n_devices <= 1:
+        return local(params, cases)
+    mesh = Mesh(np.array(jax.devices()[:n_devices]), ("cases",))
+    p_spec = PartitionSpec("cases") if params_batched else PartitionSpec()
+    # check_vma off: the linear_transpose inside the force evaluation mixes device-varying values
+    # (this device's cases) with replicated ones (the model), which its type check rejects.
+    f = jax.shard_map(local, mesh=mesh, in_specs=(p_spec, PartitionSpec("cases")), out_specs=PartitionSpec("cases"),
+                      check_vma=False)
+    return f(params, cases)
+
+
+# traces are counted so a test can prove that a grid compiles once
+_counted = eqx.debug.assert_max_traces(simulate_batch, max_traces=None)
+_program = eqx.filter_jit(_counted)
+
+
+def program_traces() -> int:
+    """How many times the batched program has been traced in this process (tests)."""
+    return eqx.debug.get_num_traces(_counted)
+
+
+def stable_steps(model, params_list, pressures, settle_damping) -> np.ndarray:
+    """The explicit step (s) of each (params, pressure) pair: one vmapped power iteration."""
+    params = _stack(params_list)
+    w = np.asarray(_max_frequencies(model, params, jnp.asarray(pressures, dtype=jnp.float64)))
+    c = float(settle_damping)
+    z = c / (2 * w)
+    return solve.SAFETY * (2.0 / w) * (np.sqrt(1 + z * z) - z)
+
+
+@eqx.filter_jit
+def _max_frequencies(model, params, pressures):
+    return jax.vmap(lambda p, pr: solve.max_frequency(model, p, pr))(params, pressures)
+
+
+def n_devices_for(n_cases: int, devices=None) -> int:
+    """Devices used for a batch of n_cases: all available (or `devices`), at most one per case."""
+    avail = len(jax.devices()) if devices is None else int(devices)
+    return max(1, min(avail, n_cases))
+
+
+@dataclasses.dataclass
+class CaseFailure:
+    """A condition whose simulation or reduction failed (the error message says where and when)."""
+
+    condition: dict
+    error: JtireError
+
+
+def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: int = 0, on_result=None,
+        on_batch=None, keep_outputs: bool = False):
+    """Run `exp` for every condition; returns a list (one per condition) of ExperimentResult or
+    CaseFailure, in order.
+
+    params_list: None (the tire's parameters for every condition) or one MaterialParams per
+    condition. batch: cases per batch (0: all at once). on_result(i, result_or_failure) is called
+    as soon as condition i is reduced; on_batch(n_conditions_done, n_total, wall_s) after every batch.
+    keep_outputs: attach the raw per-case outputs (numpy) as result.outputs (for traced checks).
+    """
+    model = tire.model
+    plist = [tire.params] * len(conditions) if params_list is None else list(params_list)
+    if len(plist) != len(conditions):
+        raise ValueError(f"{len(plist)} parameter sets for {len(conditions)} conditions")
+    params_batched = params_list is not None
+    flat = []  # (condition index, case dict)
+    for i, cond in enumerate(conditions):
+        flat += [(i, c) for c in exp.cases(cond)]
+    dts = stable_steps(model, [plist[i] for i, _ in flat], [c["pressure_Pa"] for _, c in flat],
+                       float(exp.proto.settle_damping))
+    size = len(flat) if batch <= 0 else min(batch, len(flat))
+    n_dev = n_devices_for(size, devices)
+    size = -(-size // n_dev) * n_dev  # a multiple of the device count
+    pending = {}
+    results = [None] * len(conditions)
+    done = 0
+    for start in range(0, len(flat), size):
+        chunk = list(range(start, min(start + size, len(flat))))
+        padded = chunk + [chunk[-1]] * (size - len(chunk))
+        cases = _stack([Case.of(flat[k][1]["load_N"] if "load_N" in flat[k][1] else 0.0, flat[k][1]["pressure_Pa"],
+                                dts[k], exp.aux(flat[k][1])) for k in padded])
+        params = _stack([plist[flat[k][0]] for k in padded]) if params_batched else plist[0]
+        t0 = time.perf_counter()
+        outs = jax.device_get(_program(exp, model, params, cases, n_devices=n_dev, params_batched=params_batched))
+        wall = time.perf_counter() - t0
+        for j, k in enumerate(chunk):
+            i, case = flat[k]
+            pending.setdefault(i, []).append(_index(outs, j) | {"dt": float(dts[k])})
+            if len(pending[i]) == len(exp.cases(conditions[i])):
+                res = _reduce(exp, tire, conditions[i], pending.pop(i), keep_outputs, wall / len(chunk))
+                results[i] = res
+                done += 1
+                if on_result is not None:
+                    on_result(i, res)
+        if on_batch is not None:
+            on_batch(done, len(conditions), wall)
+    return results
+
+
+def _reduce(exp, tire, condition, outputs, keep, wall_per_case):
+    try:
+        res = exp.reduce(tire, dict(condition), outputs)
+    except JtireError as e:
+        return CaseFailure(dict(condition), e)
+    res.info |= {"dt_s": outputs[0]["dt"], "wall_s_per_case_in_batch": wall_per_case}
+    if keep:
+        res.outputs = outputs
+    return res

@@ -1,0 +1,56 @@
+"""JAX's persistent compilation cache, on by default for the command line.
+
+Every jtire program (an experiment over a batch shape) takes tens of seconds to compile; the
+persistent cache keeps the compiled programs on disk so a second process with the same job compiles
+nothing. The folder is the user's cache folder, keyed by machine (CPU model, platform, JAX version),
+so programs compiled for one machine are never loaded on another:
+    $JTIRE_CACHE_DIR if set, else $XDG_CACHE_HOME/jtire/<key>, else ~/.cache/jtire/<key>.
+`jtire --no-cache ...` (or JTIRE_CACHE_DIR=off) turns it off.
+"""
+
+import hashlib
+import os
+import platform
+from pathlib import Path
+
+
+def machine_key() -> str:
+    import jax
+
+    cpu = ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        cpu = platform.processor()
+    raw = f"{platform.machine()}|{platform.system()}|{cpu}|jax {jax.__version__}"
+    return f"{platform.machine()}-jax{jax.__version__}-{hashlib.sha1(raw.encode()).hexdigest()[:10]}"
+
+
+def cache_dir():
+    """The cache folder to use, or None when turned off."""
+    env = os.environ.get("JTIRE_CACHE_DIR")
+    if env is not None:
+        return None if env.strip().lower() in ("", "0", "off", "none") else Path(env).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "jtire" / machine_key()
+
+
+def enable(path=None):
+    """Turn JAX's persistent compilation cache on (every program, however fast it compiled).
+    Returns the folder, or None when turned off or the folder cannot be made."""
+    import jax
+
+    path = cache_dir() if path is None else Path(path)
+    if path is None:
+        return None
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    jax.config.update("jax_compilation_cache_dir", str(path))
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    return path

@@ -1,0 +1,64 @@
+"""The experiment interface: a traced `simulate` and a host `reduce`, configured from a table.
+
+An `Experiment` is an equinox Module built from its validated config table (`from_table`): settings
+that fix the program's structure (counts, sample numbers, options) are static fields, every other
+setting an array leaf, so changing a duration or a force never recompiles. Then:
+
+- `cases(condition)`: the traced cases one condition expands into (one by default; E10: one per slip
+  angle), as host dicts with the case's `aux` values;
+- `simulate(model, params, case) -> outputs`: pure and traced (phases from `program.run_plan`), so
+  the batch runner vmaps it over cases and parameter sets, shards it over devices, and autodiff
+  differentiates it;
+- `reduce(tire, condition, outputs) -> ExperimentResult`: host (numpy/scipy) from the outputs of the
+  condition's cases to the quantities of result.json, with every validity check;
+- `traced(model, params, condition_cases, outputs) -> dict`: the quantities calibration and
+  sensitivities need, reduced in JAX (checked against `reduce` by the tests).
+
+The registry (`jtire.experiments`) imports the experiment modules; experiments never import it.
+"""
+
+import abc
+from typing import ClassVar
+
+import equinox as eqx
+import numpy as np
+
+from .phases import Case, Protocol
+
+
+class Experiment(eqx.Module):
+    name: ClassVar[str]
+    study_id: ClassVar[str]
+    description: ClassVar[str]
+    schema: ClassVar[dict]  # the experiment's config table: key -> schema.Field
+    needs_load: ClassVar[bool] = True
+    per_pressure: ClassVar[bool] = False  # the load does not enter (E05, E07, E08)
+    aux_names: ClassVar[tuple] = ()  # names of the case's aux values (case dict keys)
+    traced_names: ClassVar[tuple] = ()  # quantities `traced` returns
+
+    proto: Protocol
+
+    @classmethod
+    @abc.abstractmethod
+    def from_table(cls, table: dict, proto: Protocol, tire_spec) -> "Experiment":
+        """Build from the validated table (SI values); cross-field checks raise ConfigError here,
+        before anything is simulated."""
+
+    def cases(self, condition: dict) -> list:
+        """Host case dicts ({"load_N", "pressure_Pa", *aux_names}) for one condition."""
+        return [dict(condition)]
+
+    def aux(self, case: dict) -> np.ndarray:
+        return np.array([case[k] for k in self.aux_names], float)
+
+    @abc.abstractmethod
+    def simulate(self, model, params, case: Case):
+        """Traced: every phase of the experiment. Returns a pytree of arrays of fixed shapes."""
+
+    @abc.abstractmethod
+    def reduce(self, tire, condition: dict, outputs: list):
+        """Host: outputs (numpy pytrees, one per case of `cases(condition)`) -> ExperimentResult."""
+
+    def traced(self, model, params, condition_cases: list, outputs: list) -> dict:
+        """Traced quantities from the outputs of one condition's cases (jnp scalars)."""
+        raise NotImplementedError(f"{self.name}: no traced reduction")

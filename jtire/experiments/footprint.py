@@ -1,0 +1,94 @@
+"""E01 footprint: contact patch length 2a and width w under the condition's load on a flat road.
+
+Phases: inflate (rim held) -> the road placed at the first contact height -> the load ramped onto the
+rim (z free) and settled. Reduction: the patch extent of the settled state (`patch`), the rim
+deflection, and the checks that the road carries the load and no lateral force (a mirror-symmetric
+tire). Internal ISO axes (z up); lengths and deflections are reported as positive magnitudes.
+"""
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from .. import solve
+from ..errors import SimulationError
+from ..state import TireState
+from . import patch
+from .base import Experiment
+from .loads import DOWN, RIM_Z
+from .phases import FAR, flat_road, inflate_branch, load_branch
+from .program import check_phase, last_valid, phase, phase_checks, require_equilibrium, run_plan
+from .result import ExperimentResult
+
+
+def loaded_plan(model, params, case, proto, load, n_save, extra=(), ramp=None, mem=None):
+    """Inflate, touch the road, ramp `load` (N) onto the rim (z free) over `ramp` (default the
+    protocol's) and settle, then any `extra` branches. Returns (PhaseOut stacked, end state, mem with
+    z_road and the entries of `mem`)."""
+    branches = [inflate_branch(case, proto, flat_road(-FAR)),
+                load_branch(model, case, proto, lambda mem: flat_road(mem["z_road"]), load * DOWN, RIM_Z, ramp=ramp),
+                *extra]
+    y0 = TireState.at_rest(model, len(params.relaxation_times))
+    return run_plan(model, params, branches, y0, {"z_road": jnp.nan} | (mem or {}), proto.ke_tol, n_save)
+
+
+def contact_check(saved, load):
+    """(F_z, relative error against the load, F_y) at the last saved sample of a settled phase."""
+    i = last_valid(saved)
+    f = np.asarray(saved["contact_force"])[i]
+    return float(f[2]), abs(float(f[2]) - load) / load, float(f[1])
+
+
+class Footprint(Experiment):
+    name = "footprint"
+    study_id = "E01"
+    description = "E01 contact patch length and width"
+    schema = {}
+    traced_names = ("contact_length_m", "contact_width_m", "deflection_m")
+
+    n_save: int = eqx.field(static=True, default=solve.N_SAVE)
+
+    @classmethod
+    def from_table(cls, table, proto, tire_spec):
+        return cls(proto=proto)
+
+    def simulate(self, model, params, case):
+        outs, y, mem = loaded_plan(model, params, case, self.proto, case.load, self.n_save)
+        return {"phases": outs, "y": y, "z_road": mem["z_road"]}
+
+    def traced(self, model, params, condition_cases, outputs):
+        out = outputs[0]
+        length, width = patch.extent_traced(model, out["y"], patch.flat_gap(out["z_road"]))
+        return {"contact_length_m": length, "contact_width_m": width, "deflection_m": -out["y"].q[2]}
+
+    def reduce(self, tire, condition, outputs):
+        out = outputs[0]
+        model, load = tire.model, condition["load_N"]
+        inf, ld = phase(out["phases"], 0), phase(out["phases"], 1)
+        check_phase("inflate", inf, model)
+        check_phase("load", ld, model)
+        checks = phase_checks("inflate", inf, model) | phase_checks("load", ld, model)
+        z_road = float(out["z_road"])
+        length, width, area = patch.extent(model, out["y"], patch.flat_gap(z_road))
+        deflection = -float(out["y"].q[2])
+        fz, err, fy = contact_check(ld.saved, load)
+        require_equilibrium("footprint: load phase", fz, load)
+        checks |= {"contact_force_N": fz, "contact_vs_load_rel_error": err, "contact_lateral_force_N": fy}
+        if length <= 0 or width <= 0:
+            raise SimulationError(f"footprint: no contact patch (length {length:.3g} m, width {width:.3g} m) "
+                                  f"while the road carries {fz:.4g} N: degenerate tire geometry")
+        R = tire.spec.geometry.outer_radius
+        ref = tire.spec.reference
+        q = {"contact_length_m": length, "contact_width_m": width, "contact_half_length_m": length / 2,
+             "contact_area_m2": area, "deflection_m": deflection, "k_secant_N_per_m": load / deflection,
+             "geometric_chord_m": 2 * np.sqrt(max(R**2 - (R - deflection) ** 2, 0.0)),
+             "measured_contact_length_m": ref["footprint_length_mm"] or None,
+             "measured_contact_width_m": ref["footprint_width_mm"] or None}
+        return ExperimentResult(self.name, condition, q, checks=checks, info=run_info(out["phases"]))
+
+
+def run_info(phases) -> dict:
+    """Steps, simulated time and step size of a run (host)."""
+    n = np.asarray(phases.n_steps)
+    return {"steps": int(n.sum()), "simulated_s": float(np.asarray(phases.t_end)[-1]),
+            "phase_steps": [int(v) for v in n]}

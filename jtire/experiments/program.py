@@ -1,0 +1,139 @@
+"""An experiment's simulation as one traced program: its phases run by a single scan.
+
+Every experiment is a fixed sequence of phases (inflate, load, hold, release, roll, ...). Each phase
+is described by a *branch*: a function (y, t, mem) -> (Phase, mem) that builds the phase's drive and
+start state from where the previous phase ended (y: TireState, t: time, mem: a dict of scalars the
+experiment carries between phases, e.g. the road height found at first contact). `run_plan` runs the
+branches with `jax.lax.scan` over the phase index and `jax.lax.switch` over the branches, so the
+expensive part, the integration loop (`solve.run_phase`), is traced and compiled ONCE per experiment
+whatever the number of phases; only the small branch functions are compiled once each. Phase ends
+come from events (settled, unstable), the first contact height, release times, spin-up: everything is
+traced, so a whole experiment vmaps over cases and parameter sets and can be differentiated.
+
+Outputs are stacked over phases (`PhaseOut`, leading axis = phase): the end state, start and end
+times, steps, the settled / unstable flags and the `solve.observe` samples at `n_save` uniform times
+over the phase's maximum span (samples after an early end are inf).
+"""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import solve
+from ..errors import SimulationError
+from ..mesh import PART_NAMES
+from ..state import Drive, TireState
+
+
+class Phase(eqx.Module):
+    """What a branch returns: the drive, the start state, the longest duration (s) and the time
+    after the phase start (s) from which a settled state ends it (inf: the phase runs to its end)."""
+
+    drive: Drive
+    y0: TireState
+    duration: jax.Array = eqx.field(converter=lambda v: jnp.asarray(v, dtype=jnp.float64))
+    settle_after: jax.Array = eqx.field(converter=lambda v: jnp.asarray(v, dtype=jnp.float64))
+
+
+class PhaseOut(eqx.Module):
+    """One phase's result (stacked over phases by `run_plan`): times (s), steps, flags, the kinetic
+    energy at its end (J), the fastest node at its end (speed m/s, segment, section node) and the
+    saved samples. The full end state is returned for the last phase only (`run_plan`)."""
+
+    t0: jax.Array
+    t_end: jax.Array
+    n_steps: jax.Array
+    settled: jax.Array
+    blew_up: jax.Array
+    ke_end: jax.Array
+    q_end: jax.Array  # (6,) rim coordinates at the end
+    qd_end: jax.Array  # (6,)
+    speed_max: jax.Array
+    where_max: jax.Array  # (2,) int: segment, free-node column of the fastest node
+    saved: dict
+
+
+def f64(x):
+    """A float64 array (never weakly typed: a weak leaf would retrace the program)."""
+    return jnp.asarray(x, dtype=jnp.float64)
+
+
+def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
+    """Run `branches` in order from state y0 at t = 0. Returns (PhaseOut stacked over phases, the
+    end state of the last phase, mem).
+
+    branches: list of (y, t, mem) -> (Phase, mem); every branch returns the same pytree structure.
+    n_save: samples saved per phase (static).
+    """
+    def body(carry, k):
+        y, t, mem = carry
+        ph, mem = jax.lax.switch(k, branches, y, t, mem)
+        t1 = t + ph.duration
+        ts = jnp.linspace(t, t1, n_save)
+        res = solve.run_phase(model, params, ph.drive, ph.y0, t, t1, ts, t + ph.settle_after, ke_tol,
+                              solve.MAX_STEPS)
+        v = res.y.v
+        speed = jnp.sqrt(v.x**2 + v.y**2 + v.z**2)
+        speed = jnp.where(jnp.isfinite(speed), speed, jnp.inf)
+        k_max = jnp.argmax(speed)
+        out = PhaseOut(t0=t, t_end=res.t_end, n_steps=res.n_steps, settled=res.settled, blew_up=res.blew_up,
+                       ke_end=solve.kinetic_energy(model, res.y), q_end=res.y.q, qd_end=res.y.qd, speed_max=speed.reshape(-1)[k_max],
+                       where_max=jnp.stack(jnp.unravel_index(k_max, speed.shape)), saved=res.saved)
+        return (res.y, res.t_end, mem), out
+
+    mem0 = {k: f64(v) for k, v in mem0.items()}
+    (y, _, mem), outs = jax.lax.scan(body, (y0, f64(0.0), mem0), jnp.arange(len(branches)))
+    return outs, y, mem
+
+
+# ---- host side -------------------------------------------------------------------------------------
+def phase(outs: PhaseOut, i: int) -> PhaseOut:
+    """Phase i of stacked (host, numpy) outputs."""
+    return jax.tree_util.tree_map(lambda a: a[i], outs)
+
+
+def last_valid(saved: dict) -> int:
+    """Index of the last saved sample of a phase (a phase that settled early leaves inf behind)."""
+    ok = np.isfinite(np.asarray(saved["ke"]))
+    return int(np.nonzero(ok)[0][-1]) if ok.any() else 0
+
+
+def check_phase(name: str, out: PhaseOut, model, require_settled: bool = True, where: str = ""):
+    """Raise SimulationError when phase `out` (numpy leaves) blew up, or did not settle when it
+    had to; the message says which phase, when, and where on the tire."""
+    label = f"{where}{name}"
+    if bool(out.blew_up) or not np.isfinite(float(out.speed_max)) or not np.isfinite(float(out.ke_end)):
+        i, j = (int(v) for v in np.asarray(out.where_max))
+        part = PART_NAMES[model.node_part_t[j + 1]]
+        raise SimulationError(
+            f"{label}: unstable at t = {float(out.t_end):.5f} s: node speed {float(out.speed_max):.3g} m/s "
+            f"(limit {solve.V_MAX} m/s) at segment {i}, section node {j + 1} ({part})")
+    if require_settled and not bool(out.settled):
+        ke = float(out.ke_end)
+        raise SimulationError(
+            f"{label}: did not settle by t = {float(out.t_end):.4f} s: kinetic energy {ke:.3g} J above "
+            f"the tolerance (raise solver.settle_max_s or the settle damping)")
+
+
+def phase_checks(name: str, out: PhaseOut, model) -> dict:
+    """The settled flag, end time, kinetic energy and steps of a phase, for result.json."""
+    return {f"{name}_settled": bool(out.settled), f"{name}_t_end_s": float(out.t_end),
+            f"{name}_kinetic_energy_J": float(out.ke_end),
+            f"{name}_steps": int(out.n_steps)}
+
+
+# A settled state must also be in equilibrium: the kinetic-energy event can fire at a turning point of
+# a still-ringing state (a heavily under-damped settle), so the force balance is checked as well. 1 %:
+# the settle tolerance (1e-3 J) leaves residual forces far below it on every experiment measured; a
+# failure means the state is not static, whatever the event said.
+EQUILIBRIUM_TOL = 0.01
+
+
+def require_equilibrium(label: str, got: float, want: float, tol: float = EQUILIBRIUM_TOL) -> float:
+    """Relative force-balance error |got - want| / |want|; raises SimulationError above `tol`."""
+    err = abs(got - want) / abs(want)
+    if not err <= tol:
+        raise SimulationError(f"{label}: not in equilibrium: {got:.6g} N carried against {want:.6g} N applied "
+                              f"({100 * (got - want) / abs(want):+.2f} %, tolerance {100 * tol:g} %)")
+    return err
