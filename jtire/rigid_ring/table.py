@@ -96,9 +96,8 @@ CURVE_REQUIRED = ("slip_angle_deg", "lateral_force_N")
 
 def variant_keys(q: Quantity) -> tuple:
     """(two-peak key, fit key) of a damping quantity, e.g. C_by_2p_Ns_per_m, C_by_fit_Ns_per_m."""
-    stem, unit = q.key.split("_", 2)[:2], q.key.split("_", 2)[2]
-    stem = "_".join(stem)
-    return f"{stem}_2p_{unit}", f"{stem}_fit_{unit}"
+    symbol, stem, unit = q.key.split("_", 2)  # "C", "by", "Ns_per_m"
+    return f"{symbol}_{stem}_2p_{unit}", f"{symbol}_{stem}_fit_{unit}"
 
 
 def all_keys() -> tuple:
