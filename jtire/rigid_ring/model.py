@@ -11,7 +11,9 @@ gamma_b] (rim a, belt b; m, rad), their velocities (10,), then the contact's tre
 
 In-plane (Zegelaar & Pacejka; §4): belt and rim joined by the sidewall springs/dampers
 (k_bx, C_bx; k_bz, C_bz; k_btheta, C_btheta); the belt stands on the residual spring
-F_z = max(0, k_vr rho + C_vr rho_dot), rho = R0 - (z_b - z_road) (no adhesion: the max).
+F_z = max(0, k_vr rho + C_vr rho_dot) where rho = R0 - (z_b - z_road) > 0, else 0 (no adhesion:
+the max), with the damper faded in over the first RHO_RAMP = 0.5 mm of deflection (continuous force:
+see `forces`).
 Longitudinal slip (§5): u = a kappa', a du/dt + |V| u = -a V_sx, V_sx = V + x_b' - r_e theta_b'
 (minus the road's own motion), F_x = k_cx u + C_vlow du/dt with k_cx = k_k / a, so the
 contact relaxation length is a (study eq 5-17) and at V = 0 the patch is a tread spring; C_vlow
@@ -48,6 +50,7 @@ IDX = {"x_a": 0, "z_a": 1, "theta_a": 2, "x_b": 3, "z_b": 4, "theta_b": 5, "y_a"
 RIM = (0, 1, 2, 6, 7)
 BELT = (3, 4, 5, 8, 9)
 VXLOW = 1.0  # m/s: below it the low-speed tread damping is on (MF VXLOW)
+RHO_RAMP = 5e-4  # m: the residual damper fades in over this deflection (~1 ms at 0.5 m/s impact)
 
 
 def _f64(x):
@@ -129,7 +132,11 @@ class RigidRing(eqx.Module):
         rl = zb - zr
         rho = p.R0 - rl
         contact = (rho > 0).astype(y.dtype)
-        fz = jnp.maximum(0.0, p.k_vr * rho + p.C_vr * (zr_dot - vzb))
+        # no damper force before the touch (doc §2: rho = max(0, .)); the damper fades in over the
+        # first RHO_RAMP of deflection so the force stays continuous: a jump C_vr x impact speed at
+        # the touch would make the adjoint miss the touch time's sensitivity (10 % off in a test)
+        ramp = jnp.clip(rho / RHO_RAMP, 0.0, 1.0)
+        fz = contact * jnp.maximum(0.0, p.k_vr * rho + ramp * p.C_vr * (zr_dot - vzb))
         fsx = -p.k_bx * (xb - xa) - p.C_bx * (vxb - vxa)
         fsz = -p.k_bz * (zb - za) - p.C_bz * (vzb - vza)
         msth = -p.k_btheta * (thb - tha) - p.C_btheta * (vthb - vtha)
