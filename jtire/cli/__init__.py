@@ -19,6 +19,7 @@ SUBCOMMANDS = {
     "sweep": ("jtire.cli.sweep", "run an experiment over the load x pressure grid (vmapped)"),
     "compete": ("jtire.cli.compete", "ARSM vs GA vs Monte Carlo on the soil-block simulation"),
     "data": ("jtire.cli.data", "measured test-track and sandbox rolling-resistance tables and fits"),
+    "export-tir": ("jtire.cli.export_tir", "rigid-ring tables, trends, MF fit and an MF 6.1 .tir from a characterization"),
 }
 
 

@@ -1,0 +1,271 @@
+"""Rigid-ring parameters of one condition: the measured row, the derived quantities of
+docs/rigid-ring.md §3, §5 and §7, and the equinox Module the model integrates.
+
+`derive(row, tire)` gives a `Derived` record (Python floats, None where an input is missing; used by
+the tables and the .tir export). `RigidRingParams.from_derived(d)` gives the model's parameters (jax
+float64 leaves; `Derived.missing(group)` names what a scenario
+lacks; a missing input is a finite placeholder, see `_leaf`).
+
+Vertical split (§3). 1/k_sv = 1/k_bz + 1/k_vr (sidewall and residual springs in series, static).
+  Variant A (used when valid): k_dv = k_bz + k_vr (rim locked, belt on the drum: both act on the
+    belt), k_bz, k_vr = (k_dv +- sqrt(k_dv^2 - 4 k_dv k_sv)) / 2, larger root to the sidewall;
+    needs k_dv >= 4 k_sv.
+  Variant B (reported beside; used when A is invalid): k_bz = k_dv, k_vr = (1/k_sv - 1/k_dv)^-1.
+  Damping: one time constant tau = C_tot / k_sv for both, C_bz = tau k_bz, C_vr = tau k_vr (two
+  Kelvin-Voigt elements with equal tau in series are exactly one with k_sv and tau k_sv).
+Isotropic sidewall: k_bx = k_bz, C_bx = C_bz (the study measures no longitudinal sidewall spring).
+Lateral tread spring (§5): 1/k_cy = 1/k_l - 1/k_by - r_b^2/k_bgamma (rim held in camber; r_b the
+  belt centre's height above the road, R0 - F_z/k_vr, the ring's lever arm),
+  sigma_c = k_f / k_cy, C_cy = k_cy C_l / k_l. Ill-conditioned (a difference of compliances a few
+  per cent apart): when 1/k_cy <= 0 or sigma_c falls outside [a/4, min(4 a, sigma)], the SWIFT
+  choice sigma_c = a, k_cy = k_f / a is used and the ring's lateral stiffness error is reported.
+"""
+
+import dataclasses
+import math
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from ..errors import ConfigError
+from .table import ConditionRow, TireInfo
+
+SIGMA_C_RANGE = (0.25, 4.0)  # plausible sigma_c / a
+
+
+def _f(x):
+    return None if x is None else float(x)
+
+
+def _ok(*xs):
+    return all(x is not None and math.isfinite(x) for x in xs)
+
+
+@dataclasses.dataclass(frozen=True)
+class Derived:
+    """Measured and derived rigid-ring quantities of one condition (SI; None: not available)."""
+
+    load_N: float
+    pressure_Pa: float
+    tire: TireInfo
+    # measured (from the row)
+    a: float | None  # contact half length (m)
+    w: float | None
+    k_sv: float | None
+    k_dv: float | None
+    f_dv: float | None
+    C_tot: float | None
+    k_btheta: float | None
+    C_btheta: float | None
+    k_k: float | None
+    k_cx: float | None
+    k_by: float | None
+    C_by: float | None
+    k_bgamma: float | None
+    C_bgamma: float | None
+    k_l: float | None
+    C_l: float | None
+    k_f: float | None
+    k_m: float | None
+    sigma_measured: float | None  # E11 value
+    # derived
+    rho: float | None  # static deflection F_z / k_sv
+    r_l: float | None  # loaded radius R0 - rho (rim centre height)
+    r_b: float | None  # belt-centre height R0 - F_z / k_vr: the ring's lever arm to the road
+    r_e: float | None  # effective rolling radius R0 - rho / 3
+    variant_A_valid: bool
+    variant_used: str | None  # "A" or "B" or None
+    k_bz_A: float | None
+    k_vr_A: float | None
+    k_bz_B: float | None
+    k_vr_B: float | None
+    k_bz: float | None
+    k_vr: float | None
+    tau: float | None  # C_tot / k_sv (s)
+    C_bz: float | None
+    C_vr: float | None
+    C_bz_B: float | None
+    C_vr_B: float | None
+    k_bx: float | None
+    C_bx: float | None
+    sigma: float | None  # k_f / k_l (the model's)
+    k_cy: float | None
+    sigma_c: float | None
+    C_cy: float | None
+    k_cy_source: str | None  # "series compliance" or "fallback sigma_c = a (...)"
+    k_l_ring: float | None  # lateral stiffness of the ring with this k_cy (rim camber held)
+    k_l_ring_rel_error: float | None
+    C_x: float | None  # LONGITUDINAL_STIFFNESS: 1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta
+    trail: float | None  # k_m / k_f
+
+    def structural(self) -> dict:
+        """FREQ_* (Hz) and DAMP_* (-) of §7, None where an input is missing."""
+        t = self.tire
+
+        def freq(k, m):
+            return math.sqrt(k / m) / (2 * math.pi) if _ok(k) and k > 0 else None
+
+        def damp(c, k, m):
+            return c / (2 * math.sqrt(k * m)) if _ok(c, k) and k > 0 else None
+
+        return {"FREQ_LONG": freq(self.k_bz, t.m_b_kg), "FREQ_LAT": freq(self.k_by, t.m_b_kg),
+                "FREQ_YAW": freq(self.k_bgamma, t.I_bx_kgm2), "FREQ_WINDUP": freq(self.k_btheta, t.I_by_kgm2),
+                "DAMP_LONG": damp(self.C_bz, self.k_bz, t.m_b_kg), "DAMP_LAT": damp(self.C_by, self.k_by, t.m_b_kg),
+                "DAMP_YAW": damp(self.C_bgamma, self.k_bgamma, t.I_bx_kgm2),
+                "DAMP_WINDUP": damp(self.C_btheta, self.k_btheta, t.I_by_kgm2),
+                "DAMP_RESIDUAL": self.tau}
+
+    def missing(self, group: str) -> list:
+        """Inputs a model part lacks: group "vertical", "inplane", "lateral_ring", "lateral_reduced"."""
+        need = {"vertical": ("k_sv", "k_dv", "C_tot"),
+                "inplane": ("k_sv", "k_dv", "C_tot", "k_btheta", "C_btheta", "k_k", "a"),
+                "lateral_ring": ("k_sv", "k_by", "C_by", "k_bgamma", "C_bgamma", "k_l", "C_l", "k_f", "k_m", "a"),
+                "lateral_reduced": ("k_sv", "k_l", "C_l", "k_f", "k_m")}[group]
+        out = [n for n in need if getattr(self, n) is None]
+        if group != "lateral_reduced" and self.k_bz is None and "k_dv" not in out and "k_sv" not in out:
+            out.append("k_bz (k_dv <= k_sv: neither vertical split is valid)")
+        return out
+
+    def require(self, group: str, what: str) -> None:
+        m = self.missing(group)
+        if m:
+            raise ConfigError(f"{what} at {self.load_N:.0f} N / {self.pressure_Pa:.0f} Pa: missing {m}")
+
+
+def derive(row: ConditionRow, tire: TireInfo) -> Derived:
+    g = row.get
+    fz = row.load_N
+    r0 = tire.unloaded_radius_m
+    length = g("contact_length_m")
+    a = None if length is None else length / 2
+    k_sv, f_dv, c_tot = g("k_sv_N_per_m"), g("first_mode_Hz"), g("C_tot_Ns_per_m")
+    k_dv = g("k_dv_N_per_m")
+    if k_dv is None and f_dv is not None:
+        k_dv = (2 * math.pi * f_dv) ** 2 * tire.m_b_kg
+    k_k, k_cx = g("k_k_N_per_slip"), g("k_cx_N_per_m")
+    if k_cx is None and _ok(k_k, a):
+        k_cx = k_k / a
+    k_by, k_bgamma, k_l = g("k_by_N_per_m"), g("k_bgamma_Nm_per_rad"), g("k_l_N_per_m")
+    k_f, k_m, c_l = g("k_f_N_per_rad"), g("k_m_Nm_per_rad"), g("C_l_Ns_per_m")
+    k_btheta = g("k_btheta_Nm_per_rad")
+
+    rho = fz / k_sv if _ok(k_sv) else None
+    r_l = None if rho is None else r0 - rho
+    r_e = None if rho is None else r0 - rho / 3
+
+    valid_a = _ok(k_sv, k_dv) and k_dv >= 4 * k_sv
+    k_bz_a = k_vr_a = k_bz_b = k_vr_b = None
+    if valid_a:
+        disc = math.sqrt(k_dv * k_dv - 4 * k_dv * k_sv)
+        k_bz_a, k_vr_a = 0.5 * (k_dv + disc), 0.5 * (k_dv - disc)
+    if _ok(k_sv, k_dv) and k_dv > k_sv:
+        k_bz_b, k_vr_b = k_dv, 1.0 / (1.0 / k_sv - 1.0 / k_dv)
+    if valid_a:
+        used, k_bz, k_vr = "A", k_bz_a, k_vr_a
+    elif k_bz_b is not None:
+        used, k_bz, k_vr = "B", k_bz_b, k_vr_b
+    else:
+        used = k_bz = k_vr = None
+    tau = c_tot / k_sv if _ok(c_tot, k_sv) else None
+
+    def times(t, k):
+        return t * k if _ok(t, k) else None
+
+    sigma = k_f / k_l if _ok(k_f, k_l) else None
+    k_cy = sigma_c = c_cy = src = k_l_ring = k_l_err = None
+    r_b = r_l if k_vr is None else r0 - fz / k_vr
+    if _ok(k_l, k_by, k_bgamma, r_b, k_f, a):
+        comp = 1.0 / k_l - 1.0 / k_by - r_b**2 / k_bgamma
+        sc = k_f * comp if comp > 0 else None
+        lo, hi = SIGMA_C_RANGE[0] * a, min(SIGMA_C_RANGE[1] * a, sigma)
+        if sc is not None and lo <= sc <= hi:
+            k_cy, sigma_c, src = 1.0 / comp, sc, "series compliance 1/k_l - 1/k_by - r_b^2/k_bgamma"
+        else:
+            why = "1/k_cy <= 0" if sc is None else f"sigma_c = {sc:.4g} m outside [{lo:.4g}, {hi:.4g}]"
+            k_cy, sigma_c, src = k_f / a, a, f"fallback sigma_c = a ({why})"
+        k_l_ring = 1.0 / (1.0 / k_cy + 1.0 / k_by + r_b**2 / k_bgamma)
+        k_l_err = k_l_ring / k_l - 1.0
+        if _ok(c_l):
+            c_cy = k_cy * c_l / k_l
+    c_x = None
+    k_bx = k_bz
+    if _ok(k_cx, k_bx, r_b, k_btheta):
+        c_x = 1.0 / (1.0 / k_cx + 1.0 / k_bx + r_b**2 / k_btheta)
+    return Derived(
+        load_N=fz, pressure_Pa=row.pressure_Pa, tire=tire, a=a, w=g("contact_width_m"), k_sv=k_sv, k_dv=k_dv,
+        f_dv=f_dv, C_tot=c_tot, k_btheta=k_btheta, C_btheta=g("C_btheta_Nms_per_rad"), k_k=k_k, k_cx=k_cx,
+        k_by=k_by, C_by=g("C_by_Ns_per_m"), k_bgamma=k_bgamma, C_bgamma=g("C_bgamma_Nms_per_rad"), k_l=k_l,
+        C_l=c_l, k_f=k_f, k_m=k_m, sigma_measured=g("sigma_m"), rho=rho, r_l=r_l, r_b=r_b, r_e=r_e,
+        variant_A_valid=bool(valid_a), variant_used=used, k_bz_A=k_bz_a, k_vr_A=k_vr_a, k_bz_B=k_bz_b,
+        k_vr_B=k_vr_b, k_bz=k_bz, k_vr=k_vr, tau=tau, C_bz=times(tau, k_bz), C_vr=times(tau, k_vr),
+        C_bz_B=times(tau, k_bz_b), C_vr_B=times(tau, k_vr_b), k_bx=k_bx, C_bx=times(tau, k_bx), sigma=sigma,
+        k_cy=k_cy, sigma_c=sigma_c, C_cy=c_cy, k_cy_source=src, k_l_ring=k_l_ring, k_l_ring_rel_error=k_l_err,
+        C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None)
+
+
+def _leaf(x):
+    # a missing input becomes a finite placeholder (1.0): a part of the model a scenario does not
+    # exercise must stay finite, or the adaptive step's error norm turns NaN; every scenario checks
+    # its own inputs first (Derived.require)
+    return jnp.asarray(1.0 if x is None else x, dtype=jnp.float64)
+
+
+class RigidRingParams(eqx.Module):
+    """Rigid-ring parameters (SI, float64 jax scalars; 1.0 placeholders where not available).
+
+    Masses and inertias: m_b, m_a = m_tot - m_b (rim side, in-plane and ring lateral), m_tot (the
+    reduced lateral model's wheel), I_by, I_bx (belt), I_ay, I_ax (rim). Geometry: R0, a (contact
+    half length), r_l (loaded radius, R0 - F_z/k_sv), r_e (effective rolling radius). Springs and
+    dampers as in docs/rigid-ring.md §2-§6; damp_vlow (s): low-speed tread damping C = damp_vlow k
+    that keeps the standing contact from ringing undamped (MF-Swift DAMP_VLOW, 0.001 s).
+    """
+
+    m_b: jnp.ndarray
+    m_a: jnp.ndarray
+    m_tot: jnp.ndarray
+    I_by: jnp.ndarray
+    I_bx: jnp.ndarray
+    I_ay: jnp.ndarray
+    I_ax: jnp.ndarray
+    R0: jnp.ndarray
+    a: jnp.ndarray
+    r_l: jnp.ndarray
+    r_e: jnp.ndarray
+    k_bz: jnp.ndarray
+    C_bz: jnp.ndarray
+    k_vr: jnp.ndarray
+    C_vr: jnp.ndarray
+    k_bx: jnp.ndarray
+    C_bx: jnp.ndarray
+    k_btheta: jnp.ndarray
+    C_btheta: jnp.ndarray
+    k_k: jnp.ndarray
+    k_by: jnp.ndarray
+    C_by: jnp.ndarray
+    k_bgamma: jnp.ndarray
+    C_bgamma: jnp.ndarray
+    k_cy: jnp.ndarray
+    C_cy: jnp.ndarray
+    k_l: jnp.ndarray
+    C_l: jnp.ndarray
+    k_f: jnp.ndarray
+    k_m: jnp.ndarray
+    damp_vlow: jnp.ndarray
+
+    @classmethod
+    def from_derived(cls, d: Derived, damp_vlow: float = 0.001) -> "RigidRingParams":
+        t = d.tire
+        if not t.m_tot_kg > t.m_b_kg > 0:
+            raise ConfigError(f"tire m_tot_kg = {t.m_tot_kg}, m_b_kg = {t.m_b_kg}: need m_tot > m_b > 0")
+        return cls(m_b=_leaf(t.m_b_kg), m_a=_leaf(t.m_tot_kg - t.m_b_kg), m_tot=_leaf(t.m_tot_kg),
+                   I_by=_leaf(t.I_by_kgm2), I_bx=_leaf(t.I_bx_kgm2), I_ay=_leaf(t.I_ay_kgm2), I_ax=_leaf(t.I_ax_kgm2),
+                   R0=_leaf(t.unloaded_radius_m), a=_leaf(d.a), r_l=_leaf(d.r_l), r_e=_leaf(d.r_e),
+                   k_bz=_leaf(d.k_bz), C_bz=_leaf(d.C_bz), k_vr=_leaf(d.k_vr), C_vr=_leaf(d.C_vr),
+                   k_bx=_leaf(d.k_bx), C_bx=_leaf(d.C_bx), k_btheta=_leaf(d.k_btheta), C_btheta=_leaf(d.C_btheta),
+                   k_k=_leaf(d.k_k), k_by=_leaf(d.k_by), C_by=_leaf(d.C_by), k_bgamma=_leaf(d.k_bgamma),
+                   C_bgamma=_leaf(d.C_bgamma), k_cy=_leaf(d.k_cy), C_cy=_leaf(d.C_cy), k_l=_leaf(d.k_l),
+                   C_l=_leaf(d.C_l), k_f=_leaf(d.k_f), k_m=_leaf(d.k_m), damp_vlow=_leaf(damp_vlow))
+
+    @classmethod
+    def from_row(cls, row: ConditionRow, tire: TireInfo, damp_vlow: float = 0.001) -> "RigidRingParams":
+        return cls.from_derived(derive(row, tire), damp_vlow)

@@ -1,0 +1,88 @@
+"""A synthetic characterization with the study's magnitudes, for tests and demonstrations.
+
+NOT simulation output: every number is a smooth made-up law around the study's rated values
+(k_sv = 1280 kN/m, k_l = 450 kN/m, 2a = 200 mm, w = 379 mm at 4625 kg / 120 psi) or a stated
+assumption (damping ratios 0.03-0.05, sidewall stiffnesses giving FREQ_* of 20-45 Hz), and the E10
+curves come from a known MF 6.1 coefficient set (`TRUE_MF`), so a fit must recover it. The
+trends are the physical ones (stiffnesses rise with pressure, the footprint lengthens with load...).
+"""
+
+import dataclasses
+
+import numpy as np
+
+from .. import units as U
+from .magic_formula import Nominal, cornering_stiffness, fy0, mz0
+from .table import Characterization, ConditionRow, E10Curves, TireInfo
+
+LOADS_KG = (2312.5, 4625.0, 6937.5)
+PRESSURES_PSI = (70.0, 120.0, 150.0)
+E10_ANGLES_DEG = (0, 1, 2, 3, 4, 6, 8, 10, 12, 20)
+# a truck-tire-like MF 6.1 pure-side-slip set (ISO); pressure terms non-zero so a multi-pressure
+# fit has something to find
+TRUE_MF = {"PCY1": 1.35, "PDY1": 0.85, "PDY2": -0.12, "PEY1": -0.6, "PEY2": -0.25, "PKY1": -5.0, "PKY2": 1.8,
+           "PKY4": 2.0, "PPY1": 0.3, "PPY2": 0.6, "PPY3": -0.1, "PPY4": 0.05,
+           "QBZ1": 9.0, "QBZ2": -1.5, "QCZ1": 1.25, "QDZ1": 0.075, "QDZ2": -0.012, "QEZ1": -1.5, "QEZ2": -0.4,
+           "PPZ1": 0.4}
+
+
+def _xi_c(xi, k, m):
+    return 2 * xi * np.sqrt(k * m)
+
+
+def row(tire: TireInfo, load_kg: float, pressure_psi: float, mf=None, angles_deg=E10_ANGLES_DEG,
+        damping_spread: float = 0.04) -> ConditionRow:
+    """One synthetic condition. damping_spread: relative gap put between the two-peak and the
+    fitted damping values (two-peak = fit x (1 + spread))."""
+    mf = TRUE_MF if mf is None else mf
+    fz, p = load_kg * U.G0, pressure_psi * U.PSI
+    pr = p / tire.rated_pressure_Pa
+    lr = fz / tire.rated_load_N
+    nom = Nominal(tire.rated_load_N, tire.rated_pressure_Pa, tire.unloaded_radius_m)
+    k_sv = 1.28e6 * pr**0.55 * (1 + 0.08 * (lr - 1))
+    f1 = 72.0 * pr**0.12 * (1 + 0.03 * (lr - 1))
+    k_dv = (2 * np.pi * f1) ** 2 * tire.m_b_kg
+    length = 0.20012 * (lr**0.55) * pr**-0.3
+    width = 0.37932 * lr**0.08 * pr**-0.04
+    k_bth = 1.2e6 * pr**0.5
+    k_k = 1.1e6 * lr**0.8 * pr**0.1
+    k_by = 2.0e6 * pr**0.6
+    k_bg = 2.0e5 * pr**0.6
+    k_l = 450.4639e3 * pr**0.7 * (1 + 0.05 * (lr - 1))
+    k_f = float(-cornering_stiffness(mf, nom, fz, p))
+    alpha = np.radians(np.asarray(angles_deg, float))
+    fy_sae = -fy0(mf, nom, fz, -alpha, p)
+    mz_sae = -mz0(mf, nom, fz, -alpha, p)
+    small = alpha <= np.radians(3.0)
+    k_m = float(np.polyfit(alpha[small], mz_sae[small], 1)[0])
+    q = {"contact_length_m": length, "contact_width_m": width, "k_sv_N_per_m": k_sv, "first_mode_Hz": f1,
+         "k_dv_N_per_m": k_dv, "k_btheta_Nm_per_rad": k_bth, "k_k_N_per_slip": k_k, "k_cx_N_per_m": k_k / (length / 2),
+         "k_by_N_per_m": k_by, "k_bgamma_Nm_per_rad": k_bg, "k_l_N_per_m": k_l, "k_f_N_per_rad": k_f,
+         "k_m_Nm_per_rad": k_m, "sigma_m": k_f / k_l, "deflection_m": fz / k_sv}
+    for stem, unit, xi, k, m in (("C_tot", "Ns_per_m", 0.05, k_sv, tire.m_tot_kg),
+                                 ("C_btheta", "Nms_per_rad", 0.04, k_bth, tire.I_by_kgm2),
+                                 ("C_by", "Ns_per_m", 0.04, k_by, tire.m_b_kg),
+                                 ("C_bgamma", "Nms_per_rad", 0.045, k_bg, tire.I_bx_kgm2),
+                                 ("C_l", "Ns_per_m", 0.032, k_l, tire.m_tot_kg)):
+        c_fit = _xi_c(xi, k, m)
+        q[f"{stem}_fit_{unit}"] = c_fit
+        q[f"{stem}_2p_{unit}"] = c_fit * (1 + damping_spread)
+        q[f"{stem}_{unit}"] = c_fit * (1 + damping_spread)
+    curves = E10Curves(slip_angle_deg=np.asarray(angles_deg, float), lateral_force_N=fy_sae, M_z_SAE_Nm=mz_sae,
+                       F_z_N=np.full(alpha.shape, fz), F_y_SAE_N=fy_sae)
+    return ConditionRow(fz, p, q, curves)
+
+
+
+def characterization(tire: TireInfo | None = None, loads_kg=LOADS_KG, pressures_psi=PRESSURES_PSI, mf=None,
+                     angles_deg=E10_ANGLES_DEG) -> Characterization:
+    """The full synthetic grid (default 3 loads x 3 pressures) for the study's tire."""
+    tire = TireInfo.from_reference() if tire is None else tire
+    rows = tuple(row(tire, lk, pp, mf, angles_deg) for lk in loads_kg for pp in pressures_psi)
+    return Characterization(tire, rows)
+
+
+def drop(char: Characterization, keys) -> Characterization:
+    """The same characterization with the given quantity keys removed from every row."""
+    rows = tuple(dataclasses.replace(r, q={k: v for k, v in r.q.items() if k not in keys}) for r in char.rows)
+    return Characterization(char.tire, rows)

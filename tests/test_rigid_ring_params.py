@@ -1,0 +1,90 @@
+"""Derived rigid-ring quantities (docs/rigid-ring.md §3, §5, §7): closed-form identities.
+
+Tolerances are float64 round-off (1e-12 relative) unless stated: each identity is algebraic.
+"""
+
+import dataclasses
+import math
+
+import jax.numpy as jnp
+import pytest
+
+from jtire.errors import ConfigError
+from jtire.rigid_ring import synthetic
+from jtire.rigid_ring.params import RigidRingParams, derive
+
+
+@pytest.fixture(scope="module")
+def char():
+    return synthetic.characterization()
+
+
+def test_vertical_split_variant_a_identities(char):
+    for r in char.rows:
+        d = derive(r, char.tire)
+        assert d.variant_used == "A" and d.variant_A_valid
+        # statically in series, dynamically (rim locked, belt on the drum) in parallel
+        assert 1 / d.k_bz + 1 / d.k_vr == pytest.approx(1 / d.k_sv, rel=1e-12)
+        assert d.k_bz + d.k_vr == pytest.approx(d.k_dv, rel=1e-12)
+        assert d.k_bz >= d.k_vr  # the larger root goes to the sidewall
+        # variant B: k_bz = k_dv and the same series law
+        assert d.k_bz_B == d.k_dv and 1 / d.k_bz_B + 1 / d.k_vr_B == pytest.approx(1 / d.k_sv, rel=1e-12)
+        # one time constant: the series pair is exactly k_sv || tau k_sv
+        assert d.C_bz / d.k_bz == pytest.approx(d.C_tot / d.k_sv) and d.C_vr / d.k_vr == pytest.approx(d.tau)
+        assert (d.k_bx, d.C_bx) == (d.k_bz, d.C_bz)
+
+
+def test_variant_b_used_when_a_invalid(char):
+    r = char.rows[0]
+    d = derive(dataclasses.replace(r, q=r.q | {"k_dv_N_per_m": 2.0 * r.q["k_sv_N_per_m"]}), char.tire)
+    assert not d.variant_A_valid and d.variant_used == "B" and d.k_bz_A is None
+    assert d.k_bz == d.k_dv and d.k_vr == pytest.approx(2.0 * d.k_sv)  # 1/k_vr = 1/k_sv - 1/(2 k_sv)
+    d = derive(dataclasses.replace(r, q=r.q | {"k_dv_N_per_m": 0.5 * r.q["k_sv_N_per_m"]}), char.tire)
+    assert d.variant_used is None and "k_bz" in " ".join(d.missing("vertical"))
+
+
+def test_k_cy_series_compliance_reproduces_k_l(char):
+    for r in char.rows:
+        d = derive(r, char.tire)
+        assert d.k_cy_source.startswith("series")
+        assert d.k_l_ring == pytest.approx(d.k_l, rel=1e-12)
+        assert d.sigma_c == pytest.approx(d.k_f / d.k_cy) and d.C_cy == pytest.approx(d.k_cy * d.C_l / d.k_l)
+        assert d.sigma == pytest.approx(d.k_f / d.k_l)
+
+
+def test_k_cy_fallback_when_ill_conditioned(char):
+    r = char.rated_row()
+    # a lateral sidewall as soft as the whole tire: 1/k_cy <= 0
+    d = derive(dataclasses.replace(r, q=r.q | {"k_by_N_per_m": 0.9 * r.q["k_l_N_per_m"]}), char.tire)
+    assert d.k_cy_source.startswith("fallback") and "1/k_cy <= 0" in d.k_cy_source
+    assert d.sigma_c == d.a and d.k_cy == pytest.approx(d.k_f / d.a)
+    # the ring then misses k_l, and says by how much
+    k_ring = 1 / (1 / d.k_cy + 1 / d.k_by + d.r_b**2 / d.k_bgamma)
+    assert d.k_l_ring_rel_error == pytest.approx(k_ring / d.k_l - 1) and d.k_l_ring_rel_error < 0
+
+
+def test_structural_keys(char):
+    d = derive(char.rated_row(), char.tire)
+    s = d.structural()
+    t = char.tire
+    assert s["FREQ_LAT"] == pytest.approx(math.sqrt(d.k_by / t.m_b_kg) / (2 * math.pi))
+    assert s["FREQ_WINDUP"] == pytest.approx(math.sqrt(d.k_btheta / t.I_by_kgm2) / (2 * math.pi))
+    # synthetic C_by was built from zeta 0.04 x 1.04 (two-peak value)
+    assert s["DAMP_LAT"] == pytest.approx(0.04 * 1.04)
+    assert s["DAMP_RESIDUAL"] == pytest.approx(d.C_vr / d.k_vr)
+    assert 1 / d.C_x == pytest.approx(1 / d.k_cx + 1 / d.k_bx + d.r_b**2 / d.k_btheta)
+
+
+def test_missing_inputs_are_named(char):
+    c = synthetic.drop(char, {"k_by_N_per_m", "contact_length_m"})
+    d = derive(c.rated_row(), c.tire)
+    assert d.k_cy is None and d.a is None and d.structural()["FREQ_LAT"] is None
+    with pytest.raises(ConfigError, match="k_by"):
+        d.require("lateral_ring", "test")
+    d.require("lateral_reduced", "test")  # the reduced model does not need the sidewall
+
+
+def test_params_are_float64_leaves(char):
+    p = RigidRingParams.from_row(char.rated_row(), char.tire)
+    for name, leaf in vars(p).items():
+        assert isinstance(leaf, jnp.ndarray) and leaf.dtype == jnp.float64 and not leaf.weak_type, name
