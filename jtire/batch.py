@@ -1,10 +1,11 @@
 """One batch runner for every experiment: cases x parameter sets, vmapped, sharded over devices.
 
-`simulate_batch(exp, model, params, cases)` is the pure, traced program: the experiment's
-`simulate` vmapped over the leading axis of `cases` (and of `params` when it carries one), split
-over the devices with `shard_map` (each device runs its own share, its own loops: a case that settles
-early does not wait for another device's). It is compiled once per (experiment settings structure,
-mesh, batch shape, device count); JAX's persistent cache (`jtire.cache`) keeps it across processes.
+`simulate_batch(exp, model, params, cases)` is the pure, traceable batch: the experiment's
+`simulate` vmapped over the leading axis of `cases` (and of `params` when it carries one). Run
+eagerly with the batch placed across the devices (`shard`), every phase goes through one compiled
+phase program per phase structure and batch shape, partitioned over the devices by XLA, and shared by
+all experiments (`experiments.program.run_one`); JAX's persistent cache (`jtire.cache`) keeps the
+compiled programs across processes.
 
 `run(exp, tire, conditions, ...)` is the host driver: it expands conditions into cases, computes the
 stable step of each case, runs the cases in batches (padded to a multiple of the device count),
@@ -21,11 +22,12 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.sharding import Mesh, PartitionSpec
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from . import solve
 from .errors import JtireError
 from .experiments.phases import Case
+from .experiments.program import phase_traces
 
 
 def _stack(trees):
@@ -36,31 +38,27 @@ def _index(tree, i):
     return jax.tree_util.tree_map(lambda a: a[i], tree)
 
 
-def simulate_batch(exp, model, params, cases: Case, *, n_devices: int = 1, params_batched: bool = False):
-    """Traced: exp.simulate for every case (leading axis of `cases`; of `params` too when
-    params_batched). The batch size must be a multiple of n_devices."""
-    def local(p, c):
-        return jax.vmap(lambda pp, cc: exp.simulate(model, pp, cc), in_axes=(0 if params_batched else None, 0))(p, c)
+def simulate_batch(exp, model, params, cases: Case, *, params_batched: bool = False):
+    """exp.simulate for every case (leading axis of `cases`; of `params` too when params_batched).
 
+    Traceable (vmap, jvp, jit all apply). Called eagerly -- as `run` does -- every phase runs through
+    the shared compiled phase program (`experiments.program.run_one`), batched over the cases and
+    partitioned over the devices that hold them (`shard`)."""
+    return jax.vmap(lambda p, c: exp.simulate(model, p, c), in_axes=(0 if params_batched else None, 0))(params, cases)
+
+
+def shard(tree, n_devices: int):
+    """Place a batch (leading axis) across the first n_devices devices; the compiled phase programs
+    then run each device's share of the cases on that device (XLA partitions the batch)."""
     if n_devices <= 1:
-        return local(params, cases)
+        return tree
     mesh = Mesh(np.array(jax.devices()[:n_devices]), ("cases",))
-    p_spec = PartitionSpec("cases") if params_batched else PartitionSpec()
-    # check_vma off: the linear_transpose inside the force evaluation mixes device-varying values
-    # (this device's cases) with replicated ones (the model), which its type check rejects.
-    f = jax.shard_map(local, mesh=mesh, in_specs=(p_spec, PartitionSpec("cases")), out_specs=PartitionSpec("cases"),
-                      check_vma=False)
-    return f(params, cases)
-
-
-# traces are counted so a test can prove that a grid compiles once
-_counted = eqx.debug.assert_max_traces(simulate_batch, max_traces=None)
-_program = eqx.filter_jit(_counted)
+    return jax.device_put(tree, NamedSharding(mesh, PartitionSpec("cases")))
 
 
 def program_traces() -> int:
-    """How many times the batched program has been traced in this process (tests)."""
-    return eqx.debug.get_num_traces(_counted)
+    """Times the shared phase program has been traced in this process (tests)."""
+    return phase_traces()
 
 
 def stable_steps(model, params_list, pressures, settle_damping) -> np.ndarray:
@@ -101,6 +99,19 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     as soon as condition i is reduced; on_batch(n_conditions_done, n_total, wall_s) after every batch.
     keep_outputs: attach the raw per-case outputs (numpy) as result.outputs (for traced checks).
     """
+    if hasattr(exp, "components"):  # a composite (E11): its components' results combined per condition
+        subs = [run(c, tire, conditions, params_list, devices=devices, batch=batch, keep_outputs=keep_outputs)
+                for c in exp.components]
+        results = []
+        for i, cond in enumerate(conditions):
+            parts = [s[i] for s in subs]
+            res = next((p for p in parts if isinstance(p, CaseFailure)), None) or exp.combine(dict(cond), parts)
+            results.append(res)
+            if on_result is not None:
+                on_result(i, res)
+        if on_batch is not None:
+            on_batch(len(conditions), len(conditions), 0.0)
+        return results
     model = tire.model
     plist = [tire.params] * len(conditions) if params_list is None else list(params_list)
     if len(plist) != len(conditions):
@@ -122,9 +133,9 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
         padded = chunk + [chunk[-1]] * (size - len(chunk))
         cases = _stack([Case.of(flat[k][1]["load_N"] if "load_N" in flat[k][1] else 0.0, flat[k][1]["pressure_Pa"],
                                 dts[k], exp.aux(flat[k][1])) for k in padded])
-        params = _stack([plist[flat[k][0]] for k in padded]) if params_batched else plist[0]
+        params = shard(_stack([plist[flat[k][0]] for k in padded]), n_dev) if params_batched else plist[0]
         t0 = time.perf_counter()
-        outs = jax.device_get(_program(exp, model, params, cases, n_devices=n_dev, params_batched=params_batched))
+        outs = jax.device_get(simulate_batch(exp, model, params, shard(cases, n_dev), params_batched=params_batched))
         wall = time.perf_counter() - t0
         for j, k in enumerate(chunk):
             i, case = flat[k]

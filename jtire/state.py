@@ -19,7 +19,8 @@ class TireState(eqx.Module):
     """x, v: V of (T, S-2) free nodes (m, m/s); q, qd: (6,) rim; maxwell: (B, n_strain) branch
     stresses; bristle: V of (N,) tread shear deflections (m); dissipated: J in the rubber (Maxwell
     branches and tread), settle_work: J removed by the artificial settling damping, friction_work:
-    J lost to sliding at the contact points (the bristles' plastic slip)."""
+    J lost to sliding at the contact points (the bristles' plastic slip); aq: (6,) the rim's
+    acceleration in the last step (0 on prescribed DOFs), for the settled test's force residual."""
 
     x: V
     v: V
@@ -30,13 +31,14 @@ class TireState(eqx.Module):
     dissipated: Float[Array, ""]
     settle_work: Float[Array, ""]
     friction_work: Float[Array, ""]
+    aq: Float[Array, " 6"]
 
     @staticmethod
     def at_rest(model, n_branches: int):
         z = jnp.zeros(())
         zp = jnp.zeros(model.n_points)
         return TireState(model.x_ref, model.x_ref.map(jnp.zeros_like), jnp.zeros(6), jnp.zeros(6),
-                         jnp.zeros((n_branches, model.s0.shape[0])), V(zp, zp, zp), z, z, z)
+                         jnp.zeros((n_branches, model.s0.shape[0])), V(zp, zp, zp), z, z, z, jnp.zeros(6))
 
     def advance(self, upd: "Update", h, drive: "Drive"):
         free = drive.rim_free
@@ -44,7 +46,7 @@ class TireState(eqx.Module):
         v = self.v + upd.ax * h
         return TireState(self.x + v * h, v, self.q + h * qd, qd, upd.maxwell, upd.bristle,
                          self.dissipated + h * upd.power_rubber, self.settle_work + h * upd.power_settle,
-                         self.friction_work + h * upd.power_friction)
+                         self.friction_work + h * upd.power_friction, jnp.where(free, upd.aq, 0.0))
 
 
 class Update(eqx.Module):

@@ -2,11 +2,18 @@
 registry: name -> experiment class. The registry imports the experiments; they never import it."""
 
 from .base import Experiment
+from .cleat import DrumCleat
+from .cornering import Cornering, RelaxationLength
+from .drop import DropTest
 from .footprint import Footprint
 from .lateral import LateralStiffness
 from .phases import Case, Protocol
+from .rolling import RollingResistance
+from .sidewall import InplaneRotation, SidewallCamber, SidewallTranslation
 from .vertical import VerticalStiffness
 
-REGISTRY = {cls.name: cls for cls in (Footprint, VerticalStiffness, LateralStiffness)}
+REGISTRY = {cls.name: cls for cls in (Footprint, VerticalStiffness, DrumCleat, DropTest, InplaneRotation,
+                                      SidewallTranslation, SidewallCamber, LateralStiffness, Cornering,
+                                      RelaxationLength, RollingResistance)}
 
 __all__ = ["REGISTRY", "Experiment", "Case", "Protocol"]

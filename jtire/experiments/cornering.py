@@ -1,146 +1,44 @@
 """E10 cornering and aligning-torque stiffness (k_f, k_m) and E11 relaxation length sigma = k_f / k_l.
 
-The tire is dragged free-rolling (spin free, no drive torque: a truck pusher axle) on the
-flat-track machine of `rolling`: the axle stays, the road moves under it at V (-cos a, +sin a, 0)
-(ISO axes) for an SAE slip angle a (`rolling.road_velocity`: positive a = the wheel travels to the
-right of its heading; the road then pushes the tire to the left, F_y,SAE < 0). The rim's lateral
-position, camber and steer are held; z carries the load, the spin is free.
+The tire is dragged free-rolling (spin free, no drive torque: a truck pusher axle) on the flat-track
+machine (`stages.rolling_plan`): the axle stays, the road moves under it at V (-cos a, +sin a, 0) (ISO)
+for an SAE slip angle a. Rim lateral position, camber and steer held; z carries the load. Every slip
+angle is a case of its own (case aux = the angle), so a whole sweep, or a whole grid of sweeps, is one
+batch of one compiled program. The lateral deflection builds up during the settle and ramp stages
+(measured at 2 deg: ~85 % of the steady force after 0.1 s = 0.67 m rolled); only the undamped window
+is measured.
 
-All slip angles run in ONE compiled program: the rolling phase is `jax.vmap`ped over the road
-velocities and jitted once (`roll_batch_jit`; a test counts its traces with
-`eqx.debug.assert_max_traces`). The sequence per angle is that of E12 (`rolling.rolling_stages`):
-settle with damping relative to the rim frame, ramp it to zero, release (not measured), measure
-over whole segment-passing periods. All angles start from one loaded state; the lateral deflection
-builds up during settle and ramp (measured at 2 deg: ~85 % of the steady force after 0.1 s = 0.67 m
-rolled; with the default 0.25 s settle the lateral force drifts by at most ~2 % over the window). The settling damping resists the lateral
-deflection that travels through the rim frame, so the force grows by a few percent during the ramp:
-only the undamped window is measured.
-On a 2-core CPU vmap gives no speed-up over a loop (physics notes); it compiles one program for the
-whole sweep and runs it in parallel on an accelerator.
-
-Reduction (experiments.md), in SAE signs at the boundary (y_SAE = -y, z_SAE = -z):
+Reduction (experiments.md), SAE signs at the boundary (y_SAE = -y, z_SAE = -z):
   lateral force in road axes  F_lat = F_y,SAE cos a - F_x sin a
   aligning moment M_z,SAE = -(contact moment about the vertical through the wheel centre, ISO)
   k_f = -d F_lat / d a over `kf_range` (default 0-2 deg), positive (SAE cornering stiffness)
   k_m = d M_z,SAE / d a over `km_range` (default 0-3 deg), positive for an aligning moment.
 """
 
-import time
-
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import signals, solve
+from .. import signals
 from .. import units as U
-from ..config import F
 from ..errors import ConfigError
-from . import phases, rolling, static
-from .registry import Experiment, register
+from ..schema import Field, check_range_pair
+from .base import Experiment
+from .lateral import LateralStiffness
 from .result import ExperimentResult
+from .rolling import Rolling, block_stderr
 
 
-def _roll_batch(model, params, drives, y0s, t0, t1, ts, ke_tol):
-    """`solve.run_phase` vmapped over a batch of drives and start states (leading axis)."""
-    def one(drive, y0):
-        return solve.run_phase(model, params, drive, y0, t0, t1, ts, jnp.asarray(jnp.inf, float), ke_tol,
-                               solve.MAX_STEPS)
-
-    return jax.vmap(one)(drives, y0s)
-
-
-# traces are counted (not limited) so a test can prove that a sweep compiles once
-roll_batch_traced = eqx.debug.assert_max_traces(_roll_batch, max_traces=None)
-roll_batch_jit = eqx.filter_jit(roll_batch_traced)
-
-
-def _stack(trees):
-    return jax.tree.map(lambda *a: jnp.stack(a), *trees)
-
-
-def _broadcast(tree, n: int):
-    return jax.tree.map(lambda a: jnp.broadcast_to(a, (n,) + jnp.shape(a)), tree)
-
-
-def _case(tree, i: int):
-    return jax.tree.map(lambda a: a[i], tree)
-
-
-def _roll(model, params, drives, ys, t0, duration, proto):
-    t0 = jnp.asarray(t0, float)
-    t1 = t0 + jnp.asarray(duration, float)
-    ts = jnp.linspace(t0, t1, solve.N_SAVE)
-    return roll_batch_jit(model, params, drives, ys, t0, t1, ts, proto.ke_tol), np.asarray(ts)
-
-
-def _check(name, res, model, angles):
-    for i, a in enumerate(angles):
-        solve.check_phase(f"{name} (slip angle {np.degrees(a):g} deg)", _case(res, i), model, require_settled=False)
-
-
-def slip_sweep(tire, pressure, load, proto, speed, slip_angles, settle_s, ramp_s, release_s, measure_s,
-               settle_damping):
-    """Steady free rolling at every SAE slip angle (rad) of `slip_angles`, vmapped.
-
-    Returns (means: dict of (n,) arrays, F_x, F_y, F_z, M_z in ISO (N, N m) over the measurement
-    window, their block standard errors, the lateral drift over the window and the spin; info).
-    settle_damping: 1/s, relative to the rim frame (<= 0: the protocol's).
-    """
-    m, prm = tire.model, tire.params
-    angles = np.asarray(slip_angles, float)
-    n = len(angles)
-    if n < 1:
-        raise ConfigError("cornering.slip_angles_deg: must hold at least one angle")
-    dt = solve.stable_step(m, prm, pressure, float(proto.settle_damping))
-    for v in (settle_s, ramp_s, release_s, measure_s):
-        phases.steps_for(v, dt)
-    c0 = float(proto.settle_damping) if settle_damping <= 0 else float(settle_damping)
-    t_start = time.perf_counter()
-    inf, z0, ld = rolling.loaded_state(tire, pressure, load, proto, dt)
-    t_roll = time.perf_counter()
-    deflection = -float(ld.y.q[2])
-    r_est = rolling.rolling_radius_estimate(tire.spec.geometry.outer_radius, deflection)
-    vel = rolling.road_velocity(speed, angles)
-    stages = rolling.rolling_stages(
-        lambda c: _stack([rolling.rolling_drive(pressure, dt, proto, load, z0, v, c) for v in vel]),
-        lambda drv, y, t0, d: _roll(m, prm, drv, y, t0, d, proto),
-        _broadcast(phases.with_spin(m, ld.y, speed / r_est), n), ld.t_end, c0, settle_s, ramp_s, release_s,
-        measure_s, m.n_theta, lambda name, res: _check(name, res, m, angles))
-    _, ms, ts = stages[-1]
-    jax.block_until_ready(ms)
-    t_end = time.perf_counter()
-    f = np.asarray(ms.saved["contact_force"])[:, :-1]  # (n, N_SAVE - 1, 3): whole periods, half-open
-    mo = np.asarray(ms.saved["contact_moment"])[:, :-1]
-    series = {"F_x": f[..., 0], "F_y": f[..., 1], "F_z": f[..., 2], "M_z": mo[..., 2]}
-    out = {k: v.mean(axis=1) for k, v in series.items()}
-    out |= {f"{k}_stderr": np.array([rolling.block_stderr(row) for row in v]) for k, v in series.items()}
-    # steadiness: drift of the lateral force over the window relative to its mean
-    # (undefined where the mean vanishes: at 0 deg the mirror-symmetric tire has F_y ~ 1e-11 N)
-    out["F_y_drift_rel"] = np.array([signals.steady_mean(ts[:-1], row).drift_relative if abs(row.mean()) > 1.0
-                                     else np.nan for row in series["F_y"]])
-    q_spin = np.asarray(ms.saved["q"])[:, :, 4]
-    out["spin"] = (q_spin[:, -1] - q_spin[:, 0]) / (ts[-1] - ts[0])
-    steps = sum(int(np.asarray(r.n_steps)[0]) for _, r, _ in stages)
-    info = {"dt_s": dt, "steps": int(inf.n_steps) + int(ld.n_steps) + steps, "rolling_steps_per_angle": steps,
-            "simulated_s": float(np.asarray(ms.t_end)[0]), "settle_s": settle_s, "ramp_s": ramp_s,
-            "release_s": release_s, "measure_s": float(ts[-1] - ts[0]), "settle_damping_per_s": c0,
-            "n_slip_angles": n, "wall_s_including_compile": t_end - t_start, "wall_s_rolling": t_end - t_roll,
-            "deflection_m": deflection, "vmapped": True}
-    return out, info
-
-
-def lateral_sae(alpha, fx, fy_iso):
+def lateral_sae(alpha, fx, fy_iso, xp=np):
     """Lateral force in road axes, SAE signs: F_y,SAE cos a - F_x sin a (N), F_y,SAE = -F_y,ISO."""
-    a = np.asarray(alpha, float)
-    return -np.asarray(fy_iso) * np.cos(a) - np.asarray(fx) * np.sin(a)
+    return -fy_iso * xp.cos(alpha) - fx * xp.sin(alpha)
 
 
 def reduce_cornering(alpha, fx, fy_iso, mz_iso, kf_range, km_range):
     """k_f (N/rad) and k_m (N m/rad) from steady forces at SAE slip angles alpha (rad): slopes over
     the given (lo, hi) ranges in rad (at least 3 angles each). Returns (quantities, curves)."""
     a = np.asarray(alpha, float)
-    lat = lateral_sae(a, fx, fy_iso)
+    lat = lateral_sae(a, np.asarray(fx), np.asarray(fy_iso))
     mz = -np.asarray(mz_iso, float)
     kf = signals.linear_slope(a, lat, kf_range)
     km = signals.linear_slope(a, mz, km_range)
@@ -152,96 +50,157 @@ def reduce_cornering(alpha, fx, fy_iso, mz_iso, kf_range, km_range):
     return q, {"lateral_force_N": lat, "aligning_moment_Nm": mz}
 
 
-def _cornering_result(tire, condition, proto, speed, slip_angles, stages, settle_damping, kf_range, km_range, name):
-    """stages: (settle_s, ramp_s, release_s, measure_s)."""
-    p, load = condition["pressure_Pa"], condition["load_N"]
-    means, info = slip_sweep(tire, p, load, proto, speed, slip_angles, *stages, settle_damping)
-    a = np.asarray(slip_angles, float)
-    q, curves = reduce_cornering(a, means["F_x"], means["F_y"], means["M_z"], kf_range, km_range)
-    lat_err = np.hypot(means["F_y_stderr"] * np.cos(a), means["F_x_stderr"] * np.sin(a))
-    q |= {"peak_lateral_force_N": float(np.max(np.abs(curves["lateral_force_N"]))),
-          "peak_lateral_force_over_load": float(np.max(np.abs(curves["lateral_force_N"]))) / load,
-          "speed_m_per_s": speed, "load_N": load}
-    sig = {"slip_angle_deg": np.degrees(a), "lateral_force_N": curves["lateral_force_N"],
-           "lateral_force_stderr_N": lat_err, "F_x_N": means["F_x"], "F_y_SAE_N": -means["F_y"],
-           "M_z_SAE_Nm": curves["aligning_moment_Nm"], "M_z_stderr_Nm": means["M_z_stderr"],
-           "F_z_N": means["F_z"], "spin_rad_per_s": means["spin"], "F_y_drift_rel": means["F_y_drift_rel"]}
-    drift = np.abs(means["F_y_drift_rel"])
-    checks = {"max_vertical_force_vs_load_rel_error": float(np.max(np.abs(means["F_z"] - load)) / load),
-              "max_lateral_drift_rel_over_window": float(np.nanmax(drift)) if np.any(np.isfinite(drift)) else 0.0}
-    return ExperimentResult(name, condition, q, signals=sig, checks=checks, info=info)
+def _slope_traced(x, y, mask):
+    """Least-squares slope of y on x over the points where mask (static bool array) is True."""
+    x, y = x[mask], y[mask]
+    xc = x - x.mean()
+    return jnp.sum(xc * (y - y.mean())) / jnp.sum(xc * xc)
 
 
-def run_cornering(tire, condition, proto, speed, slip_angles, stages, settle_damping, kf_range, km_range):
-    """E10: the slip-angle sweep, k_f, k_m and the full curves. stages: (settle_s, ramp_s,
-    release_s, measure_s)."""
-    return _cornering_result(tire, condition, proto, speed, slip_angles, stages, settle_damping, kf_range, km_range,
-                             "cornering")
+def _range_mask(angles, rng, name):
+    m = (np.asarray(angles) >= rng[0] - 1e-12) & (np.asarray(angles) <= rng[1] + 1e-12)
+    if m.sum() < 3:
+        raise ConfigError(f"{name} = {[round(float(np.degrees(v)), 6) for v in rng]} deg: holds {int(m.sum())} of the "
+                          f"slip angles, need at least 3")
+    return m
 
 
-def run_relaxation_length(tire, condition, proto, speed, slip_angles, stages, settle_damping, kf_range,
-                          lateral_force):
-    """E11: sigma = k_f / k_l, k_f from a small-angle sweep (E10's reduction), k_l from the static
-    E09 (`static.run_lateral_stiffness`, force `lateral_force` N) at the same condition."""
-    kf_res = _cornering_result(tire, condition, proto, speed, slip_angles, stages, settle_damping, kf_range,
-                               kf_range, "relaxation_length")
-    # k_l only: the free decay that gives C_l (decay > 0) is not needed here
-    kl_res = static.run_lateral_stiffness(tire, condition, proto, lateral_force, decay=0.0)
-    k_f, k_l = kf_res.quantities["k_f_N_per_rad"], kl_res.quantities["k_l_N_per_m"]
-    q = {"sigma_m": k_f / k_l, "k_f_N_per_rad": k_f, "k_l_N_per_m": k_l, "k_f_fit_r2": kf_res.quantities["k_f_fit_r2"],
-         "k_f_range_deg": kf_res.quantities["k_f_range_deg"], "lateral_force_N": lateral_force,
-         "lateral_deflection_m": kl_res.quantities["lateral_deflection_m"]}
-    checks = kf_res.checks | {f"lateral_{k}": v for k, v in kl_res.checks.items()}
-    info = kf_res.info | {"lateral_stiffness_wall_s": kl_res.info["wall_s_including_compile"]}
-    return ExperimentResult("relaxation_length", condition, q, signals=kf_res.signals, checks=checks, info=info)
-
-
-def _range(name, r):
-    if len(r) != 2 or not r[0] < r[1]:
-        raise ConfigError(f"{name} = {[float(np.degrees(v)) for v in r]}: must be [lo, hi] deg with lo < hi")
-    return r
-
-
-def _stages(kw):
-    return tuple(kw.pop(k) for k in ("settle_s", "ramp_s", "release_s", "measure_s"))
-
-
-def _cornering_runner(tire, c, p, **kw):
-    kf = _range("cornering.kf_range_deg", kw.pop("kf_range_deg"))
-    km = _range("cornering.km_range_deg", kw.pop("km_range_deg"))
-    return run_cornering(tire, c, p, kw.pop("speed_mph"), kw.pop("slip_angles_deg"), _stages(kw),
-                         kw.pop("settle_damping_per_s"), kf, km)
-
-
-def _relaxation_runner(tire, c, p, **kw):
-    kf = _range("relaxation_length.kf_range_deg", kw.pop("kf_range_deg"))
-    return run_relaxation_length(tire, c, p, kw.pop("speed_mph"), kw.pop("slip_angles_deg"), _stages(kw),
-                                 kw.pop("settle_damping_per_s"), kf, kw.pop("lateral_force_kN"))
-
-
-# The lateral deflection builds up over a rolled distance of a few relaxation lengths (~0.5 m
-# expected for this tire): the settle stage is therefore longer than E12's; ramp and release as
-# E12 (`rolling.ROLLING_SCHEMA`, not referenced here: the registry imports both modules while
-# `rolling` is still initializing).
-_COMMON = {
-    "speed_mph": F(float, U.MPH, 0.5, 60, 15.0, "mph"),
-    "settle_s": F(float, 1, 0.005, 5, 0.25, "s"),
-    "ramp_s": F(float, 1, 0.0, 1, 0.06, "s"),
-    "release_s": F(float, 1, 0.0, 2, 0.03, "s"),
-    "measure_s": F(float, 1, 0.005, 5, 0.05, "s"),
-    "settle_damping_per_s": F(float, 1, 0, 1e4, 0.0, "1/s (0: the solver's settle damping)"),
+COMMON = {
+    "speed_mph": Field(float, U.MPH, 0.5, 60, 15.0, "mph"),
+    "settle_s": Field(float, 1, 0.005, 5, 0.25, "s"),
+    "ramp_s": Field(float, 1, 0.0, 1, 0.06, "s"),
+    "release_s": Field(float, 1, 0.0, 2, 0.03, "s"),
+    "measure_s": Field(float, 1, 0.005, 5, 0.05, "s"),
+    "settle_damping_per_s": Field(float, 1, 0, 1e4, 0.0, "1/s (0: the solver's settle damping)"),
 }
 
-register(Experiment(
-    "cornering", _cornering_runner,
-    _COMMON | {"slip_angles_deg": F(list, U.DEG, -30, 30, [0, 1, 2, 3, 4, 6, 8, 10, 12, 20], "deg"),
-               "kf_range_deg": F(list, U.DEG, -30, 30, [0.0, 2.0], "deg"),
-               "km_range_deg": F(list, U.DEG, -30, 30, [0.0, 3.0], "deg")},
-    description="E10 cornering stiffness k_f and aligning-torque stiffness k_m (vmapped slip-angle sweep)"))
 
-register(Experiment(
-    "relaxation_length", _relaxation_runner,
-    _COMMON | {"slip_angles_deg": F(list, U.DEG, -30, 30, [0, 1, 2], "deg"),
-               "kf_range_deg": F(list, U.DEG, -30, 30, [0.0, 2.0], "deg"),
-               "lateral_force_kN": F(float, U.KN, 0.01, 100, 5.0, "kN")},
-    description="E11 relaxation length sigma = k_f / k_l (E10 small angles + static E09)"))
+class Cornering(Rolling):
+    name = "cornering"
+    study_id = "E10"
+    description = "E10 cornering stiffness k_f and aligning-torque stiffness k_m (slip-angle sweep, one case per angle)"
+    schema = COMMON | {"slip_angles_deg": Field(list, U.DEG, -30, 30, [0, 1, 2, 3, 4, 6, 8, 10, 12, 20], "deg", min_len=3),
+                       "kf_range_deg": Field(list, U.DEG, -30, 30, [0.0, 2.0], "deg"),
+                       "km_range_deg": Field(list, U.DEG, -30, 30, [0.0, 3.0], "deg")}
+    aux_names = ("slip_angle",)
+    traced_names = ("k_f_N_per_rad", "k_m_Nm_per_rad")
+
+    slip_angles: tuple = eqx.field(static=True, default=())
+    kf_mask: tuple = eqx.field(static=True, default=())
+    km_mask: tuple = eqx.field(static=True, default=())
+    kf_range: tuple = eqx.field(static=True, default=())
+    km_range: tuple = eqx.field(static=True, default=())
+
+    @classmethod
+    def from_table(cls, table, proto, tire_spec, name=None):
+        name = name or cls.name
+        angles = tuple(table["slip_angles_deg"])
+        if len(set(angles)) != len(angles):
+            raise ConfigError(f"{name}.slip_angles_deg: lists an angle twice")
+        kf = check_range_pair(f"{name}.kf_range_deg", table["kf_range_deg"], "deg", U.DEG)
+        km = check_range_pair(f"{name}.km_range_deg", table.get("km_range_deg", table["kf_range_deg"]), "deg", U.DEG)
+        kf_mask = tuple(bool(v) for v in _range_mask(angles, kf, f"{name}.kf_range_deg"))
+        km_mask = tuple(bool(v) for v in _range_mask(angles, km, f"{name}.km_range_deg"))
+        return cls(slip_angles=angles, kf_mask=kf_mask, km_mask=km_mask, kf_range=kf, km_range=km,
+                   **cls.rolling_fields(table, proto, tire_spec, table["settle_damping_per_s"]))
+
+    def cases(self, condition):
+        return [dict(condition, slip_angle=a) for a in self.slip_angles]
+
+    def simulate(self, model, params, case):
+        return self.roll(model, params, case, case.aux[0])
+
+    def _means(self, outputs, xp):
+        f, m = [], []
+        for out in outputs:
+            s = out["phases"].saved
+            f.append(s["contact_force"][-1][:-1].mean(axis=0))  # measure stage, whole periods (half-open)
+            m.append(s["contact_moment"][-1][:-1, 2].mean())
+        return xp.stack(f), xp.stack(m)
+
+    def traced(self, model, params, condition_cases, outputs):
+        f, mz = self._means(outputs, jnp)
+        a = jnp.asarray(self.slip_angles)
+        lat = lateral_sae(a, f[:, 0], f[:, 1], jnp)
+        return {"k_f_N_per_rad": -_slope_traced(a, lat, np.array(self.kf_mask)),
+                "k_m_Nm_per_rad": _slope_traced(a, -mz, np.array(self.km_mask))}
+
+    def reduce(self, tire, condition, outputs):
+        model, load = tire.model, condition["load_N"]
+        checks = {}
+        for out, a in zip(outputs, self.slip_angles):
+            c = self.check(out, model, where=f"slip angle {np.degrees(a):g} deg: ")
+            checks |= {f"{k} (slip {np.degrees(a):g} deg)": v for k, v in c.items() if k.endswith("_settled")}
+        a = np.asarray(self.slip_angles)
+        series = []
+        for out in outputs:
+            t, s = self.measure_samples(out)
+            series.append((t, s))
+        fxyz = np.stack([s["contact_force"][:-1] for _, s in series])  # (n, N-1, 3)
+        mzs = np.stack([s["contact_moment"][:-1, 2] for _, s in series])
+        means = {"F_x": fxyz[..., 0].mean(1), "F_y": fxyz[..., 1].mean(1), "F_z": fxyz[..., 2].mean(1), "M_z": mzs.mean(1)}
+        err = {k: np.array([block_stderr(row) for row in v]) for k, v in
+               (("F_x", fxyz[..., 0]), ("F_y", fxyz[..., 1]), ("M_z", mzs))}
+        drift = np.array([signals.steady_mean(t[:-1], s["contact_force"][:-1, 1]).drift_relative
+                          if abs(s["contact_force"][:-1, 1].mean()) > 1.0 else np.nan for t, s in series])
+        spin = np.array([(s["q"][-1, 4] - s["q"][0, 4]) / (t[-1] - t[0]) for t, s in series])
+        q, curves = reduce_cornering(a, means["F_x"], means["F_y"], means["M_z"], self.kf_range, self.km_range)
+        lat = curves["lateral_force_N"]
+        q |= {"peak_lateral_force_N": float(np.max(np.abs(lat))),
+              "peak_lateral_force_over_load": float(np.max(np.abs(lat))) / load,
+              "speed_m_per_s": float(self.speed), "load_N": load}
+        sig = {"slip_angle_deg": np.degrees(a), "lateral_force_N": lat,
+               "lateral_force_stderr_N": np.hypot(err["F_y"] * np.cos(a), err["F_x"] * np.sin(a)),
+               "F_x_N": means["F_x"], "F_y_SAE_N": -means["F_y"], "M_z_SAE_Nm": curves["aligning_moment_Nm"],
+               "M_z_stderr_Nm": err["M_z"], "F_z_N": means["F_z"], "spin_rad_per_s": spin, "F_y_drift_rel": drift}
+        checks |= {"max_vertical_force_vs_load_rel_error": float(np.max(np.abs(means["F_z"] - load)) / load),
+                   "max_lateral_drift_rel_over_window": float(np.nanmax(np.abs(drift))) if np.any(np.isfinite(drift)) else 0.0}
+        info = {"n_slip_angles": len(a), "steps_per_angle": [int(np.asarray(o["phases"].n_steps).sum()) for o in outputs],
+                "settle_s": float(self.settle_s), "ramp_s": self.ramp_s, "release_s": self.release_s,
+                "measure_s": float(series[0][0][-1] - series[0][0][0])}
+        info["steps"] = int(sum(info["steps_per_angle"]))
+        return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
+
+
+class RelaxationLength(Experiment):
+    """E11: sigma = k_f / k_l, k_f from a small-angle sweep (E10's reduction), k_l from the static E09
+    at the same condition. A composite: the batch runner runs its `components` and `combine`s them."""
+
+    name = "relaxation_length"
+    study_id = "E11"
+    description = "E11 relaxation length sigma = k_f / k_l (E10 small angles + static E09)"
+    schema = COMMON | {"slip_angles_deg": Field(list, U.DEG, -30, 30, [0, 1, 2], "deg", min_len=3),
+                       "kf_range_deg": Field(list, U.DEG, -30, 30, [0.0, 2.0], "deg"),
+                       "lateral_force_kN": Field(float, U.KN, 0.01, 100, 5.0, "kN")}
+
+    cornering: Cornering
+    lateral: LateralStiffness
+
+    @classmethod
+    def from_table(cls, table, proto, tire_spec):
+        t = {k: v for k, v in table.items() if k != "lateral_force_kN"}
+        t["km_range_deg"] = t["kf_range_deg"]
+        cor = Cornering.from_table(t, proto, tire_spec, name=cls.name)
+        lat = LateralStiffness.from_table({"force_kN": table["lateral_force_kN"], "decay_s": 0.0, "release_ramp_ms": 0.0},
+                                          proto, tire_spec)
+        return cls(proto=proto, cornering=cor, lateral=lat)
+
+    @property
+    def components(self):
+        return (self.cornering, self.lateral)
+
+    def combine(self, condition, results):
+        kf_res, kl_res = results
+        k_f, k_l = kf_res.quantities["k_f_N_per_rad"], kl_res.quantities["k_l_N_per_m"]
+        q = {"sigma_m": k_f / k_l, "k_f_N_per_rad": k_f, "k_l_N_per_m": k_l, "k_f_fit_r2": kf_res.quantities["k_f_fit_r2"],
+             "k_f_range_deg": kf_res.quantities["k_f_range_deg"], "lateral_force_N": kl_res.quantities["lateral_force_N"],
+             "lateral_deflection_m": kl_res.quantities["lateral_deflection_m"]}
+        checks = kf_res.checks | {f"lateral_{k}": v for k, v in kl_res.checks.items()}
+        info = {"steps": kf_res.info.get("steps", 0) + kl_res.info.get("steps", 0)}
+        return ExperimentResult(self.name, condition, q, signals=kf_res.signals, checks=checks, info=info)
+
+    def simulate(self, model, params, case):
+        raise NotImplementedError("relaxation_length is a composite: run its components")
+
+    def reduce(self, tire, condition, outputs):
+        raise NotImplementedError("relaxation_length is a composite: combine its components' results")

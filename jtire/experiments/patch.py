@@ -138,3 +138,12 @@ def surface_gap(surface, t=0.0):
 def host_gap(gap_fn):
     """A traced-style gap_fn made to return numpy (for `extent` on the host)."""
     return lambda S: np.asarray(jax.device_get(gap_fn(S)))
+
+
+def x_range_traced(model, y, gap_fn, n_fine: int = N_FINE):
+    """Traced: (x_rear, x_front) in m of the patch of state y inside a partner (e.g. a drum)."""
+    p = _tread_grid(model, y, jnp)
+    P = jnp.einsum("mt,tcd->mcd", jnp.asarray(spline_operator(model.n_theta, n_fine)), p)
+    S = _surface(P, jnp, n_fine)
+    hi, lo = _edge_range(S[..., 0], gap_fn(S), jnp, 0, True)
+    return lo, hi

@@ -4,11 +4,10 @@ Every experiment is a fixed sequence of phases (inflate, load, hold, release, ro
 is described by a *branch*: a function (y, t, mem) -> (Phase, mem) that builds the phase's drive and
 start state from where the previous phase ended (y: TireState, t: time, mem: a dict of scalars the
 experiment carries between phases, e.g. the road height found at first contact). `run_plan` runs the
-branches with `jax.lax.scan` over the phase index and `jax.lax.switch` over the branches, so the
-expensive part, the integration loop (`solve.run_phase`), is traced and compiled ONCE per experiment
-whatever the number of phases; only the small branch functions are compiled once each. Phase ends
-come from events (settled, unstable), the first contact height, release times, spin-up: everything is
-traced, so a whole experiment vmaps over cases and parameter sets and can be differentiated.
+branches in order; each phase's integration is `run_one`, one compiled program shared by every phase
+of the same structure in every experiment. Phase ends come from events (settled, unstable), the
+first contact height, release times, spin-up: everything is JAX code on traced values, so a whole
+experiment vmaps over cases and parameter sets and can be differentiated.
 
 Outputs are stacked over phases (`PhaseOut`, leading axis = phase): the end state, start and end
 times, steps, the settled / unstable flags and the `solve.observe` samples at `n_save` uniform times
@@ -59,32 +58,54 @@ def f64(x):
     return jnp.asarray(x, dtype=jnp.float64)
 
 
+def _run_one(model, params, ph: Phase, t, ke_tol, n_save: int):
+    """One phase from its branch's description: integrate, summarize. Returns (PhaseOut, end state)."""
+    t1 = t + ph.duration
+    ts = jnp.linspace(t, t1, n_save)
+    res = solve.run_phase(model, params, ph.drive, ph.y0, t, t1, ts, t + ph.settle_after, ke_tol, solve.MAX_STEPS)
+    v = res.y.v
+    speed = jnp.sqrt(v.x**2 + v.y**2 + v.z**2)
+    speed = jnp.where(jnp.isfinite(speed), speed, jnp.inf)
+    k_max = jnp.argmax(speed)
+    out = PhaseOut(t0=t, t_end=res.t_end, n_steps=res.n_steps, settled=res.settled, blew_up=res.blew_up,
+                   ke_end=solve.kinetic_energy(model, res.y), q_end=res.y.q, qd_end=res.y.qd,
+                   speed_max=speed.reshape(-1)[k_max], where_max=jnp.stack(jnp.unravel_index(k_max, speed.shape)),
+                   saved=res.saved)
+    return out, res.y
+
+
+# One compiled program per phase *structure* (surface type, rigid belt, belt loads, samples per phase,
+# batch shape, sharding), shared by every phase of every experiment that has it: the flat-road
+# experiments (E01, E02, E04, E09-E12) all run through one program, the rigid-belt ones (E05, E07,
+# E08) through another. Compiling each experiment as a whole (all its phases inlined into one XLA
+# program) cost 40-100 s per experiment on this 2-core machine; shared phases compile a few times in all.
+_run_one_counted = eqx.debug.assert_max_traces(_run_one, max_traces=None)
+run_one = eqx.filter_jit(_run_one_counted)
+
+
+def phase_traces() -> int:
+    """Times the phase program has been traced in this process (a test proves a grid traces it once)."""
+    return eqx.debug.get_num_traces(_run_one_counted)
+
+
 def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
     """Run `branches` in order from state y0 at t = 0. Returns (PhaseOut stacked over phases, the
     end state of the last phase, mem).
 
-    branches: list of (y, t, mem) -> (Phase, mem); every branch returns the same pytree structure.
+    branches: list of (y, t, mem) -> (Phase, mem). The branches are plain JAX code, the integration
+    of each phase is the shared compiled program `run_one`; the whole plan is traceable (vmap, jvp,
+    jit) and, called eagerly under vmap, reuses the compiled phase program for every phase.
     n_save: samples saved per phase (static).
     """
-    def body(carry, k):
-        y, t, mem = carry
-        ph, mem = jax.lax.switch(k, branches, y, t, mem)
-        t1 = t + ph.duration
-        ts = jnp.linspace(t, t1, n_save)
-        res = solve.run_phase(model, params, ph.drive, ph.y0, t, t1, ts, t + ph.settle_after, ke_tol,
-                              solve.MAX_STEPS)
-        v = res.y.v
-        speed = jnp.sqrt(v.x**2 + v.y**2 + v.z**2)
-        speed = jnp.where(jnp.isfinite(speed), speed, jnp.inf)
-        k_max = jnp.argmax(speed)
-        out = PhaseOut(t0=t, t_end=res.t_end, n_steps=res.n_steps, settled=res.settled, blew_up=res.blew_up,
-                       ke_end=solve.kinetic_energy(model, res.y), q_end=res.y.q, qd_end=res.y.qd, speed_max=speed.reshape(-1)[k_max],
-                       where_max=jnp.stack(jnp.unravel_index(k_max, speed.shape)), saved=res.saved)
-        return (res.y, res.t_end, mem), out
-
-    mem0 = {k: f64(v) for k, v in mem0.items()}
-    (y, _, mem), outs = jax.lax.scan(body, (y0, f64(0.0), mem0), jnp.arange(len(branches)))
-    return outs, y, mem
+    y, t = y0, f64(0.0)
+    mem = {k: f64(v) for k, v in mem0.items()}
+    outs = []
+    for branch in branches:
+        ph, mem = branch(y, t, mem)
+        out, y = run_one(model, params, ph, t, ke_tol, n_save)
+        outs.append(out)
+        t = out.t_end
+    return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *outs), y, mem
 
 
 # ---- host side -------------------------------------------------------------------------------------
