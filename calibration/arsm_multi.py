@@ -66,7 +66,7 @@ class CalibrationResult:
 
     theta: (d,) best log-parameters; values: (m,) its responses (SI); errors_pct: (m,);
     total_error_pct: the objective there; n_evaluations: simulator points used (replayed
-    included); n_batches; cost_forward: forward-run equivalents (Jacobians included);
+    included); n_jacobians: Jacobian calls; n_batches; cost_forward: forward-run equivalents (Jacobians included);
     wall_s: simulator wall time of the records; stop_reason; records: the history records.
     """
 
@@ -75,6 +75,7 @@ class CalibrationResult:
     errors_pct: np.ndarray
     total_error_pct: float
     n_evaluations: int
+    n_jacobians: int
     n_batches: int
     cost_forward: float
     wall_s: float
@@ -98,7 +99,8 @@ def result_from_log(log: RunLog, reason: str) -> CalibrationResult:
         theta = np.full(log.sim.space.d, np.nan)
         vals = errs = np.full(len(names), np.nan)
         total = float("inf")
-    return CalibrationResult(theta, vals, errs, total, log.n_evaluations, log.n_batches,
+    n_jac = sum(1 for r in recs if "jacobian" in r)
+    return CalibrationResult(theta, vals, errs, total, log.n_evaluations, n_jac, log.n_batches,
                              log.cost_forward, log.wall_s, reason, log.method, list(recs))
 
 
@@ -167,10 +169,43 @@ def _propose(obj, region, best_u, seed):
     return best, float(obj.predict(best)[0])
 
 
+FILLS = ("local", "region")
+WEIGHTINGS = ("distance", "nearest")
+
+
+def _fit_points(u, ok, region, n_want, weighting):
+    """(indices, weights) of the points a surface is fitted to.
+
+    "nearest": the points in the region, topped up with the nearest outside ones until there
+    are n_want (calibration.arsm's rule), equal weights. "distance": every finite point, with
+    weight 1 / (1 + g^2), g its distance outside the region in region widths (max-norm): all the
+    information paid for is used, the region's points dominate.
+    """
+    if weighting == "nearest":
+        idx = _fit_set(u, np.where(ok, 0.0, np.nan), region, n_want)
+        return idx, None
+    idx = np.flatnonzero(ok)
+    gap = np.maximum(region.lower - u[idx], 0) + np.maximum(u[idx] - region.upper, 0)
+    g = np.max(gap / np.maximum(region.width, 1e-12), axis=1)
+    return idx, 1.0 / (1.0 + g**2)
+
+
+def _fill(kind, n, u, centre, region, seed):
+    """n extra points of a batch: "region": maximin in the whole region; "local": maximin in a
+    box of a quarter of the region's widths about `centre` (the proposal), inside the region,
+    so that the next surfaces see the neighbourhood of the point they proposed."""
+    if kind == "region":
+        return maximin_fill(n, u, region.lower, region.upper, seed)
+    half = 0.125 * region.width
+    lo = np.clip(centre - half, region.lower, region.upper - 2 * half)
+    return maximin_fill(n, u, lo, lo + 2 * half, seed)
+
+
 def calibrate_arsm(sim, targets, log: RunLog, seed: int = 0, batch_size: int = 4,
                    n_initial: int = 0, surface: str = DEFAULT_SURFACE, region_rule: str = "arsm",
                    min_width: float = 1e-3, min_shrink: float = 0.5, initial_width: float = 1.0,
-                   tol_percent: float = 0.0, weights=None, progress=None) -> CalibrationResult:
+                   tol_percent: float = 0.0, weights=None, fill: str = "local",
+                   weighting: str = "distance", progress=None) -> CalibrationResult:
     """Multi-response ARSM (module docstring) through `log` (budget, history, replay).
 
     sim: Simulator (its space fixes d and the box); targets: the Targets (measured values);
@@ -182,6 +217,10 @@ def calibrate_arsm(sim, targets, log: RunLog, seed: int = 0, batch_size: int = 4
     d, m = space.d, len(targets)
     if surface not in KINDS:
         raise ConfigError(f"arsm.surface = {surface!r}: must be one of {KINDS}")
+    if weighting not in WEIGHTINGS:
+        raise ConfigError(f"arsm.weighting = {weighting!r}: must be one of {WEIGHTINGS}")
+    if fill not in FILLS:
+        raise ConfigError(f"arsm.fill = {fill!r}: must be one of {FILLS}")
     if region_rule not in RULES:
         raise ConfigError(f"arsm.region_rule = {region_rule!r}: must be one of {RULES}")
     n0 = d + 2 if not n_initial else int(n_initial)
@@ -196,7 +235,7 @@ def calibrate_arsm(sim, targets, log: RunLog, seed: int = 0, batch_size: int = 4
     n_want = terms(surface, d, m) + 1
     U, Y = [], []  # unit coordinates and responses of every evaluated point
 
-    def run(batch_u, phase, extras=None):
+    def run(batch_u, phase, extras=None):  # noqa: E306
         batch_u = np.atleast_2d(batch_u)[: log.remaining]
         if batch_u.shape[0] == 0:
             raise BudgetExhausted("budget")
@@ -224,9 +263,9 @@ def calibrate_arsm(sim, targets, log: RunLog, seed: int = 0, batch_size: int = 4
                 break
             ok = np.isfinite(f)
             best = int(np.nanargmin(f))
-            idx = _fit_set(u, np.where(ok, f, np.nan), region, n_want)
+            idx, wts = _fit_points(u, ok, region, n_want, weighting)
             surfaces = fit_responses(u[idx], np.log(np.array(Y)[idx]), surface,
-                                     region.lower, region.upper)
+                                     region.lower, region.upper, wts)
             obj = _Objective(surfaces, lt, w)
             if region_rule == "arsm":
                 region = arsm_update(region, obj, second_best(f[ok]), u[best],
@@ -239,18 +278,21 @@ def calibrate_arsm(sim, targets, log: RunLog, seed: int = 0, batch_size: int = 4
             near = np.max(np.abs(u - x_new) / np.maximum(region.width, 1e-12), axis=1)
             extras = [{"pred_total_error_pct": pred, "kind": surfaces[0].kind,
                        "region": [region.lower.tolist(), region.upper.tolist()]}]
+            reg = {"region": [region.lower.tolist(), region.upper.tolist()]}
             if near.min() < _MIN_SEPARATION:
-                batch, phase = np.empty((0, d)), "fill"
-                n_fill = max(batch_size, 1)
-                extras = []
+                batch, phases, extras = np.empty((0, d)), [], []
+                n_fill, centre = max(batch_size, 1), u[best]
             else:
-                batch, phase, n_fill = x_new[None], "minimizer", batch_size - 1
+                batch, phases, n_fill, centre = x_new[None], ["minimizer"], batch_size - 1, x_new
+                extras = [{"pred_total_error_pct": pred, "kind": surfaces[0].kind, **reg}]
             if n_fill > 0:
-                fill = maximin_fill(n_fill, u, region.lower, region.upper, _sub_seed(seed, it, 3))
-                batch = np.concatenate([batch, fill])
-                extras += [{"region": [region.lower.tolist(), region.upper.tolist()]}] * n_fill
+                batch = np.concatenate([batch, _fill(fill, n_fill, u, centre, region,
+                                                     _sub_seed(seed, it, 3))])
+                phases += [f"fill_{fill}"] * n_fill
+                extras += [reg] * n_fill
             f_best_old = f[best]
-            y = run(batch, phase, extras[: min(len(batch), log.remaining)])
+            k = min(len(batch), log.remaining)
+            y = run(batch, phases[:k], extras[:k])
             f_new = totals()[-len(y):]
             got = np.nanmin(f_new) if np.isfinite(f_new).any() else np.inf
             failed = not got < f_best_old

@@ -106,16 +106,18 @@ def _features(z, W):
     return np.concatenate([np.ones((z.shape[0], 1)), z, p[:, a] * p[:, b]], axis=1)
 
 
-def _fit_projected(u, y, W, lo, hi, kind):
+def _fit_projected(u, y, W, lo, hi, kind, weights=None):
     centre, half = 0.5 * (lo + hi), np.where(hi > lo, 0.5 * (hi - lo), 1.0)
     z = (u - centre) / half
     phi = _features(z, W)
-    coef, _, rank, _ = np.linalg.lstsq(phi, y, rcond=None)
-    cov = np.linalg.pinv(phi.T @ phi)
+    sw = np.ones(len(y)) if weights is None else np.sqrt(np.asarray(weights, float))
+    a = phi * sw[:, None]
+    coef, _, rank, _ = np.linalg.lstsq(a, y * sw, rcond=None)
+    cov = np.linalg.pinv(a.T @ a)
     resid = y - phi @ coef
     dof = phi.shape[0] - rank
-    sigma2 = float(resid @ resid / dof) if dof > 0 else float("nan")
-    h = np.einsum("np,pq,nq->n", phi, cov, phi)
+    sigma2 = float(np.sum((sw * resid) ** 2) / dof) if dof > 0 else float("nan")
+    h = np.einsum("np,pq,nq->n", a, cov, a)
     with np.errstate(divide="ignore", invalid="ignore"):
         loo = np.where(h > _HAT_ONE, np.inf, resid / (1 - h))
     return ProjectedQuadratic(coef, W, kind, centre, half, cov, sigma2, loo, u.shape[0])
@@ -128,11 +130,12 @@ def _direction_basis(G, k):
     return vt[keep][:k].T
 
 
-def fit_responses(u, Y, kind: str, lo=None, hi=None) -> list:
+def fit_responses(u, Y, kind: str, lo=None, hi=None, weights=None) -> list:
     """One surface per column of Y.
 
     u: (n, d) unit coordinates; Y: (n, m) values to fit (ln responses), all finite;
     lo, hi: (d,) the box that scales the fit (default: the points' bounding box).
+    weights: optional (n,) non-negative weights of the points (weighted least squares).
     A kind the points cannot fix with one point to spare falls back to the next leaner one
     (subspace -> ridge -> linear; reduced -> linear); the surface's .kind says what was fitted.
     """
@@ -145,15 +148,15 @@ def fit_responses(u, Y, kind: str, lo=None, hi=None) -> list:
         raise ValueError(f"surface kind {kind!r}: must be one of {KINDS}")
     if kind == "reduced":
         k = "reduced" if n >= n_terms(d, "reduced") + 1 else "linear"
-        return [fit_quadratic(u, Y[:, j], lo, hi, kind=k) for j in range(m)]
-    linear = [fit_quadratic(u, Y[:, j], lo, hi, kind="linear") for j in range(m)]
+        return [fit_quadratic(u, Y[:, j], lo, hi, kind=k, weights=weights) for j in range(m)]
+    linear = [fit_quadratic(u, Y[:, j], lo, hi, kind="linear", weights=weights) for j in range(m)]
     if kind == "linear":
         return linear
     grads = np.array([s.coef[1:1 + d] for s in linear])  # (m, d) in the scaled variable z
     if kind == "subspace" and n >= terms("subspace", d, m) + 1:
         W = _direction_basis(grads, m)
-        return [_fit_projected(u, Y[:, j], W, lo, hi, "subspace") for j in range(m)]
+        return [_fit_projected(u, Y[:, j], W, lo, hi, "subspace", weights) for j in range(m)]
     if n < terms("ridge", d) + 1:
         return linear
-    return [_fit_projected(u, Y[:, j], _direction_basis(grads[j], 1), lo, hi, "ridge")
+    return [_fit_projected(u, Y[:, j], _direction_basis(grads[j], 1), lo, hi, "ridge", weights)
             for j in range(m)]

@@ -146,9 +146,10 @@ class RunLog:
                               "--out folder)")
         return rec
 
-    def evaluate(self, thetas, phase: str, extras=None) -> np.ndarray:
+    def evaluate(self, thetas, phase, extras=None) -> np.ndarray:
         """Responses (n, m) of the points thetas (n, d), as one batch; replayed where recorded.
 
+        phase: a label for every record (str) or one per point (list of n str).
         extras: optional list of n dicts of JSON-able fields for the records. Raises
         BudgetExhausted when the budget cannot take the whole batch (callers trim first).
         """
@@ -157,6 +158,7 @@ class RunLog:
         if n > self.remaining:
             raise BudgetExhausted(f"{self.method}: budget of {self.budget} evaluations used")
         extras = extras or [{}] * n
+        phases = [phase] * n if isinstance(phase, str) else list(phase)
         start = len(self.records)
         out = np.full((n, len(self.targets)), np.nan)
         todo = []
@@ -180,7 +182,7 @@ class RunLog:
             cost = self.sim.cost_forward_equivalents.get("evaluate", 1.0)
             for j, i in enumerate(todo):
                 out[i] = vals[j]
-                new[i] = self._record(start + i, thetas[i], vals[j], phase, batch, wall, len(todo), cost,
+                new[i] = self._record(start + i, thetas[i], vals[j], phases[i], batch, wall, len(todo), cost,
                                       extras[i])
         for i in range(n):  # in order, so the file is in evaluation order
             rec = self._replay[start + i] if i not in new else new[i]

@@ -8,8 +8,8 @@ Layout (every field checked; a bad one is a ConfigError naming it, one line):
     [targets.NAME] ...                       # calibration.targets
     [[free]] name = ..., factor|bounds = [lo, hi], why = "..."   # calibration.space
     [objective] weights = { NAME = 1.0 }     # optional; equal weights by default
-    [arsm] budget, seed, batch_size, n_initial, surface, region_rule, min_width, min_shrink,
-           initial_width, tol_percent
+    [arsm] budget, seed, batch_size, n_initial, surface, region_rule, fill, weighting,
+           min_width, min_shrink, initial_width, tol_percent
     [gradient] max_iterations, forward_budget, lambda0, tol_percent, min_step
     [sensitivity] quantities = [...]         # default: the target responses
     [anchor.NAME] simulated = ..., error_percent = ...   # the study's Table 4-4, shown beside ours
@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ..config import F, apply_overrides, load_toml, tire_from_dict, validate_table
 from ..errors import ConfigError
-from .arsm_multi import DEFAULT_SURFACE, RULES
+from .arsm_multi import DEFAULT_SURFACE, FILLS, RULES, WEIGHTINGS
 from .response_surfaces import KINDS
 from .space import ParamSpace
 from .targets import parse_targets
@@ -40,6 +40,8 @@ ARSM_SCHEMA = {
     "n_initial": F(int, 1, 0, 100000, 0, "points (0: d + 2)"),
     "surface": F(str, default=DEFAULT_SURFACE),
     "region_rule": F(str, default="arsm"),
+    "fill": F(str, default="local"),
+    "weighting": F(str, default="distance"),
     "min_width": F(float, 1, 1e-6, 1, 1e-3, "(unit box)"),
     "min_shrink": F(float, 1, 0.05, 1, 0.5),
     "initial_width": F(float, 1, 0.01, 1, 1.0, "(unit box)"),
@@ -145,6 +147,9 @@ def load_calibration(path, overrides=(), data_dir=None) -> CalibrationSpec:
         raise ConfigError(f"arsm.surface = {arsm['surface']!r}: must be one of {KINDS}")
     if arsm["region_rule"] not in RULES:
         raise ConfigError(f"arsm.region_rule = {arsm['region_rule']!r}: must be one of {RULES}")
+    for key, allowed in (("fill", FILLS), ("weighting", WEIGHTINGS)):
+        if arsm[key] not in allowed:
+            raise ConfigError(f"arsm.{key} = {arsm[key]!r}: must be one of {allowed}")
     if arsm["n_initial"] and not 2 <= arsm["n_initial"] <= arsm["budget"]:
         raise ConfigError(f"arsm.n_initial = {arsm['n_initial']}: must be 0 or in [2, arsm.budget "
                           f"= {arsm['budget']}]")

@@ -113,6 +113,7 @@ class StandinSimulator(Simulator):
         base = self.base
         f = lambda th: jnp.stack([_response(space.to_params(th, base), t) for t in self.targets])  # noqa: E731
         self._batch = jax.jit(jax.vmap(f))
+        self._jac = {}
 
     def evaluate(self, thetas) -> np.ndarray:
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
@@ -131,11 +132,14 @@ class StandinSimulator(Simulator):
         if unknown:
             raise KeyError(f"stand-in simulator: unknown quantities {unknown}; known: "
                            f"{list(self.quantity_names)}")
-        base, space = self.base, self.space
-        f = lambda th: jnp.stack([self._quantities[q](space.to_params(th, base)) for q in names])  # noqa: E731
+        if names not in self._jac:
+            base, space = self.base, self.space
+            f = lambda th: jnp.stack([self._quantities[q](space.to_params(th, base)) for q in names])  # noqa: E731
+            self._jac[names] = jax.jit(lambda th: (f(th), jax.jacfwd(f)(th)))
         th = jnp.asarray(np.asarray(theta, dtype=float))
         self.n_jacobians += 1
-        return np.array(f(th)), np.array(jax.jacfwd(f)(th))
+        vals, jac = self._jac[names](th)
+        return np.array(vals), np.array(jac)
 
     def fingerprint(self) -> dict:
         return {"simulator": "standin", "note": "closed-form stand-in, not physics"}
