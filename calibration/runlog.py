@@ -31,7 +31,7 @@ from .history import BudgetExhausted
 from .simulator import check_batch
 from .targets import percent_errors
 from ..errors import ConfigError
-from ..io import append_jsonl, atomic_write_json, read_jsonl
+from ..io import append_jsonl, atomic_write_json, atomic_write_text, read_jsonl
 
 __all__ = ["RunLog", "check_fingerprint", "BudgetExhausted", "load_records", "records_arrays"]
 
@@ -66,6 +66,17 @@ def records_arrays(records, names):
     return th.reshape(len(records), -1), y.reshape(len(records), len(names))
 
 
+def _drop_torn_tail(path, n_complete):
+    """A kill during an append leaves a torn last line; the next append would glue onto it and
+    hide every later record from read_jsonl. Rewrite the file with its complete records only."""
+    lines = path.read_text().splitlines(keepends=True)
+    if len(lines) > n_complete or (lines and not lines[-1].endswith("\n")):
+        keep = "".join(lines[:n_complete])
+        if keep and not keep.endswith("\n"):
+            keep += "\n"
+        atomic_write_text(path, keep)
+
+
 class RunLog:
     """Counts, records and replays the simulator calls of one optimizer run.
 
@@ -86,6 +97,8 @@ class RunLog:
         self.path = None if path is None else Path(path)
         self.records: list = []
         self._replay = [] if self.path is None else read_jsonl(self.path)
+        if self.path is not None and self.path.exists():
+            _drop_torn_tail(self.path, len(self._replay))
         for r in self._replay:
             if r.get("method") != self.method or int(r.get("seed", -1)) != self.seed:
                 raise ConfigError(f"history {self.path}: holds method={r.get('method')!r} "
