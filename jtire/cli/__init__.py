@@ -1,4 +1,4 @@
-"""The `jtire` command line: `jtire run | sweep | compete | data` (calibration and sampling: not yet).
+"""The `jtire` command line: `jtire run | sweep | compete | data | calibrate | sample | sensitivity`.
 
 One module per subcommand in this package (`jtire.cli.run`, ...); this file only wires them together, and
 turns every expected failure (a bad config, an unstable simulation) into one line on stderr and a
@@ -20,6 +20,9 @@ SUBCOMMANDS = {
     "compete": ("jtire.cli.compete", "ARSM vs GA vs Monte Carlo on the soil-block simulation"),
     "data": ("jtire.cli.data", "measured test-track and sandbox rolling-resistance tables and fits"),
     "export-tir": ("jtire.cli.export_tir", "rigid-ring tables, trends, MF fit and an MF 6.1 .tir from a characterization"),
+    "calibrate": ("jtire.cli.calibrate", "tune the tire's parameters to the calibration targets (ARSM or Levenberg-Marquardt)"),
+    "sample": ("jtire.cli.sample", "posterior of the calibrated parameters (emcee on an emulator of the targets)"),
+    "sensitivity": ("jtire.cli.sensitivity", "d(quantity)/d(log parameter) table, heat map and identifiable directions"),
 }
 
 

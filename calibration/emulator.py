@@ -1,0 +1,144 @@
+"""An emulator of the target responses, trained on every simulator run of a calibration.
+
+The posterior needs the four responses at hundreds of thousands of parameter sets; the shell
+model gives tens. Each response gets its own model of ln(response) over the unit box of the
+log-parameters, chosen by leave-one-out (LOO) error among:
+
+- "linear", "reduced", "full": quadratic surfaces (surrogates.fit_quadratic), each only when the
+  points fix it with at least one to spare. Predictive variance of a new run:
+  sigma2 (1 + phi^T (A^T A)^+ phi), the residual variance plus the variance of the fitted mean.
+- "gp": a linear surface plus a Gaussian process on its residuals (scikit-learn's
+  GaussianProcessRegressor: constant x anisotropic RBF + white noise, hyperparameters by
+  maximum likelihood, seeded restarts). LOO in closed form for the fitted hyperparameters
+  (Rasmussen & Williams eq. 5.12; the hyperparameters and the linear part are not refitted per
+  left-out point, so its LOO is slightly optimistic). Offered only if scikit-learn is installed.
+
+`Emulator.predict(thetas)` returns the mean of ln(response) and its predictive variance,
+shape (n, m) each; the posterior adds that variance to each target's measurement variance.
+"""
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..surrogates import fit_quadratic, n_terms
+
+__all__ = ["Emulator", "fit_emulator", "gp_available", "CANDIDATES"]
+
+CANDIDATES = ("linear", "reduced", "full", "gp")
+
+
+def gp_available() -> bool:
+    try:
+        import sklearn.gaussian_process  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+class _Quadratic:
+    def __init__(self, surf):
+        self.s, self.kind = surf, surf.kind
+        self.loo = np.asarray(surf.loo_residuals, float)
+        s2 = surf.sigma2
+        # without residual freedom the LOO mean square stands in for the residual variance
+        self.s2 = s2 if np.isfinite(s2) else float(np.mean(self.loo**2))
+
+    def predict(self, u):
+        mean = self.s.predict(u)
+        var = self.s.variance(u)
+        var = np.where(np.isfinite(var), var, 0.0)
+        return mean, self.s2 + np.maximum(var, 0.0)
+
+
+
+class _GP:
+    kind = "gp"
+
+    def __init__(self, u, y, seed):
+        from sklearn.gaussian_process import GaussianProcessRegressor
+        from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+        d = u.shape[1]
+        self.lin = fit_quadratic(u, y, np.zeros(d), np.ones(d), kind="linear")
+        r = y - self.lin.predict(u)
+        self.mu, self.sd = float(np.mean(r)), float(np.std(r)) or 1.0
+        rs = (r - self.mu) / self.sd
+        kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.full(d, 0.5), (1e-2, 1e2))
+                  + WhiteKernel(1e-2, (1e-8, 1e1)))
+        self.gp = GaussianProcessRegressor(kernel, n_restarts_optimizer=2, random_state=seed)
+        self.gp.fit(u, rs)
+        k = self.gp.kernel_(u) + self.gp.alpha * np.eye(len(u))
+        kinv = np.linalg.inv(k)
+        self.loo = self.sd * (kinv @ rs) / np.diag(kinv)
+
+    def predict(self, u):
+        u = np.atleast_2d(u)
+        m, s = self.gp.predict(u, return_std=True)
+        return self.lin.predict(u) + self.mu + self.sd * m, (self.sd * s) ** 2
+
+
+def _candidates(u, y, wanted, seed):
+    n, d = u.shape
+    out = {}
+    for kind in ("linear", "reduced", "full"):
+        if kind in wanted and n >= n_terms(d, kind) + 1:
+            out[kind] = _Quadratic(fit_quadratic(u, y, np.zeros(d), np.ones(d), kind=kind))
+    if "gp" in wanted and gp_available() and n >= d + 3:
+        out["gp"] = _GP(u, y, seed)
+    return out
+
+
+@dataclasses.dataclass
+class Emulator:
+    """Per-response models of ln(response) over the unit box of a ParamSpace.
+
+    names: (m,) responses; kinds: (m,) the chosen model per response; loo: {response: {kind:
+    LOO RMSE of ln(response)}} for every candidate tried; n_points: training points.
+    """
+
+    space: object
+    names: tuple
+    models: list
+    kinds: tuple
+    loo: dict
+    n_points: int
+
+    def predict(self, thetas):
+        """thetas (n, d) -> (mean of ln response (n, m), predictive variance (n, m))."""
+        u = self.space.to_unit(np.atleast_2d(np.asarray(thetas, float)))
+        out = [m.predict(u) for m in self.models]
+        return (np.stack([o[0] for o in out], axis=-1), np.stack([o[1] for o in out], axis=-1))
+
+    def summary(self) -> dict:
+        return {"n_points": self.n_points, "chosen": dict(zip(self.names, self.kinds)),
+                "loo_rmse_ln": self.loo, "gp_available": gp_available()}
+
+
+def fit_emulator(space, names, thetas, responses, candidates=CANDIDATES, seed: int = 0) -> Emulator:
+    """Fit every candidate to each response and keep the smallest LOO RMSE.
+
+    thetas: (n, d) log-parameters of the simulator runs; responses: (n, m) SI (rows with a
+    non-finite or non-positive value are left out).
+    """
+    thetas = np.atleast_2d(np.asarray(thetas, float))
+    y = np.asarray(responses, float).reshape(thetas.shape[0], -1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ok = np.all(np.isfinite(y) & (y > 0), axis=1) & np.all(np.isfinite(thetas), axis=1)
+    u, ly = space.to_unit(thetas[ok]), np.log(y[ok])
+    if u.shape[0] < space.d + 2:
+        raise ConfigError(f"emulator: {u.shape[0]} usable simulator runs for {space.d} parameters; "
+                          f"needs at least d + 2 = {space.d + 2} (run the calibration first)")
+    bad = [c for c in candidates if c not in CANDIDATES]
+    if bad or not candidates:
+        raise ConfigError(f"emulator.candidates = {list(candidates)!r}: allowed {CANDIDATES}")
+    models, kinds, loo = [], [], {}
+    for j, name in enumerate(names):
+        cands = _candidates(u, ly[:, j], candidates, seed)
+        scores = {k: float(np.sqrt(np.mean(c.loo**2))) for k, c in cands.items()}
+        finite = {k: v for k, v in scores.items() if np.isfinite(v)}
+        best = min(finite, key=finite.get) if finite else min(scores, key=scores.get)
+        models.append(cands[best]), kinds.append(best)
+        loo[name] = scores
+    return Emulator(space, tuple(names), models, tuple(kinds), loo, int(u.shape[0]))

@@ -1,0 +1,91 @@
+"""The gradient route: Levenberg-Marquardt on log parameters with the simulator's Jacobian.
+
+Residuals are the weighted log-ratios r_i = sqrt(w_i) ln(y_i / t_i): relative errors to first
+order, and nearly linear in ln(parameters) for responses that behave like power laws of the
+moduli, which is what Gauss-Newton needs. The Jacobian comes from `Simulator.jacobian` (autodiff,
+dy/dtheta, (m, d)); in unit coordinates u of the log box, J_u = sqrt(w) (dy/dtheta / y) width.
+
+With m = 4 targets and d >= 15 parameters the problem is under-determined: the step is the
+minimum-norm LM step delta = -J^T (J J^T + lambda I)^-1 r (an m x m solve), so among the many
+parameter sets that meet the targets it walks to the one nearest the start. Bounds: the box is
+enforced by projection, and a parameter at a bound whose gradient pushes outwards is frozen for
+the step (a projected LM).
+
+Why numpy and not optimistix.LevenbergMarquardt: the simulator is a host call that returns
+values and Jacobian together at a stated cost (the batched shell runner), not a jax function;
+optimistix would need it wrapped in pure_callback with a custom jvp, hide how many runs each
+step costs, and it has no bounds. Forty lines of LM keep every call visible and counted.
+
+Cost: every iteration calls jacobian once at the trial point (values and J together), rejected
+trials included; each call is recorded with its forward-run equivalents
+(`Simulator.cost_forward_equivalents["jacobian"]`) and wall time, in the same history format as
+ARSM, so a killed run resumes by replay.
+"""
+
+import numpy as np
+
+from .arsm_multi import CalibrationResult, result_from_log
+from .runlog import BudgetExhausted, RunLog
+
+__all__ = ["calibrate_lm"]
+
+_LAMBDA_DOWN, _LAMBDA_UP = 1.0 / 3.0, 4.0
+
+
+def _residuals(vals, jac, targets, weights, width):
+    sw = np.sqrt(weights)
+    meas = np.array([t.measured for t in targets])
+    r = sw * np.log(vals / meas)
+    ju = sw[:, None] * jac / vals[:, None] * width[None, :]
+    return r, ju
+
+
+def calibrate_lm(sim, targets, log: RunLog, weights=None, max_iterations: int = 30,
+                 lambda0: float = 1e-2, tol_percent: float = 0.01, min_step: float = 1e-8,
+                 theta0=None, progress=None) -> CalibrationResult:
+    """Projected minimum-norm Levenberg-Marquardt from theta0 (default: the base tire).
+
+    Stops: "target" (total error <= tol_percent), "step" (the step fell below min_step in unit
+    coordinates), "iterations", "budget" (the log's forward budget), "failed" (the simulator
+    returned non-finite values at the start).
+    """
+    space = sim.space
+    w = np.ones(len(targets)) if weights is None else np.asarray(weights, float)
+    width = space.width
+    u = space.to_unit(space.default if theta0 is None else theta0)
+    lam = float(lambda0)
+    reason = "iterations"
+    try:
+        vals, jac = log.jacobian(space.from_unit(u), phase="lm_start")
+        if not (np.all(np.isfinite(vals)) and np.all(vals > 0) and np.all(np.isfinite(jac))):
+            return result_from_log(log, "failed")
+        r, ju = _residuals(vals, jac, targets, w, width)
+        for _ in range(int(max_iterations)):
+            err = np.sum(w * 100.0 * np.abs(vals / np.array([t.measured for t in targets]) - 1.0))
+            if err <= tol_percent:
+                reason = "target"
+                break
+            g = ju.T @ r
+            free = ~(((u <= 0.0) & (g > 0)) | ((u >= 1.0) & (g < 0)))
+            jf = ju[:, free]
+            delta = np.zeros_like(u)
+            delta[free] = -jf.T @ np.linalg.solve(jf @ jf.T + lam * np.eye(len(r)), r)
+            u_new = np.clip(u + delta, 0.0, 1.0)
+            if np.max(np.abs(u_new - u)) < min_step:
+                reason = "step"
+                break
+            v_new, j_new = log.jacobian(space.from_unit(u_new), phase="lm",
+                                        extra={"lambda": lam})
+            ok = np.all(np.isfinite(v_new)) and np.all(v_new > 0) and np.all(np.isfinite(j_new))
+            r_new, ju_new = _residuals(v_new, j_new, targets, w, width) if ok else (None, None)
+            if ok and r_new @ r_new < r @ r:
+                u, vals, r, ju = u_new, v_new, r_new, ju_new
+                lam = max(lam * _LAMBDA_DOWN, 1e-12)
+            else:
+                lam *= _LAMBDA_UP
+            if progress is not None:
+                progress(result_from_log(log, "running"))
+    except BudgetExhausted:
+        reason = "budget"
+    return result_from_log(log, reason)
+

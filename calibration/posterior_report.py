@@ -1,0 +1,120 @@
+"""What `jtire sample` reports: predictive intervals beside the targets, parameter widths, a
+corner plot, and the check of the emulator against the simulator.
+
+- predictive(): posterior-predictive median and 90 % interval of each target's response and of
+  what an engineer reads off it (k_sv, k_l, RRC; calibration.targets.derived_quantity), from
+  posterior samples pushed through the emulator with its predictive noise (what the tire model
+  would give; the measurement noise is not added).
+- widths(): each parameter's 90 % posterior interval in ln p against its 90 % prior interval.
+- plot_corner(): pairwise scatter / histograms (matplotlib) of the most constrained parameters.
+- simulator_check(): >= 32 posterior draws through the simulator as ONE batch; the fraction of
+  draws whose simulated ln(response) falls inside the emulator's 90 % predictive interval, per
+  response (a calibrated emulator gives ~0.9).
+"""
+
+from pathlib import Path
+
+import numpy as np
+from scipy import stats
+
+from .posterior import prior_interval
+from .targets import derived_quantity
+from ..io import atomic_savefig
+
+__all__ = ["predictive", "widths", "plot_corner", "simulator_check"]
+
+_Z90 = float(stats.norm.ppf(0.95))
+
+
+def predictive(emulator, samples, targets, seed: int = 0, level: float = 0.9) -> list:
+    """Rows: target, quantity, measured, median, lower, upper (target unit and derived)."""
+    rng = np.random.default_rng(seed)
+    mu, var = emulator.predict(samples)
+    ly = mu + np.sqrt(np.maximum(var, 0)) * rng.standard_normal(mu.shape)
+    y = np.exp(ly)
+    q = [50, 50 * (1 - level), 50 * (1 + level)]
+    rows = []
+    for i, t in enumerate(targets):
+        med, lo, hi = np.percentile(y[:, i], q)
+        rows.append({"target": t.name, "what": t.quantity, "unit": t.unit,
+                     "measured": t.measured / t.unit_factor, "median": med / t.unit_factor,
+                     "lower": lo / t.unit_factor, "upper": hi / t.unit_factor})
+        label, dv, unit = derived_quantity(t, y[:, i])
+        _, dm, _ = derived_quantity(t, t.measured)
+        dmed, dlo, dhi = np.percentile(dv, q)
+        if label != t.name:
+            rows.append({"target": t.name, "what": label, "unit": unit, "measured": float(dm),
+                         "median": dmed, "lower": min(dlo, dhi), "upper": max(dlo, dhi)})
+    return rows
+
+
+def widths(samples, space, prior: str, sigma_ln: float, level: float = 0.9) -> list:
+    """Rows: parameter, prior and posterior `level` interval widths in ln p, their ratio, the
+    posterior median in the tire file's unit."""
+    a = 50 * (1 - level)
+    post = np.percentile(samples, [a, 100 - a], axis=0).T
+    pri = prior_interval(space, prior, sigma_ln, level)
+    med = np.median(samples, axis=0)
+    rows = []
+    for i, n in enumerate(space.names):
+        factor, unit = space.file_unit(i)
+        pw, qw = float(pri[i, 1] - pri[i, 0]), float(post[i, 1] - post[i, 0])
+        rows.append({"parameter": n, "prior_width_ln": pw, "posterior_width_ln": qw,
+                     "ratio": qw / pw, "median": float(np.exp(med[i]) / factor), "unit": unit})
+    return rows
+
+
+def plot_corner(samples, names, path, max_params: int = 8, order=None, title: str = "") -> Path:
+    """Corner plot (ln p) of up to max_params parameters (order: indices, most constrained
+    first); histograms on the diagonal, 2-D histograms below."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    idx = list(range(len(names)) if order is None else order)[:max_params]
+    k = len(idx)
+    fig, axes = plt.subplots(k, k, figsize=(1.6 * k + 1, 1.6 * k + 1), squeeze=False)
+    for r in range(k):
+        for c in range(k):
+            ax = axes[r][c]
+            if c > r:
+                ax.axis("off")
+                continue
+            x = samples[:, idx[c]]
+            if r == c:
+                ax.hist(x, bins=30, color="C0", histtype="stepfilled", alpha=0.7)
+                ax.set_yticks([])
+            else:
+                ax.hist2d(x, samples[:, idx[r]], bins=30, cmap="Blues")
+            if r == k - 1:
+                ax.set_xlabel(f"ln {names[idx[c]].replace('parts.', '')}", fontsize=6)
+            if c == 0 and r > 0:
+                ax.set_ylabel(f"ln {names[idx[r]].replace('parts.', '')}", fontsize=6)
+            ax.tick_params(labelsize=5)
+    fig.suptitle(title, fontsize=8)
+    fig.tight_layout()
+    return atomic_savefig(fig, path, dpi=100)
+
+
+def simulator_check(sim, emulator, samples, n_draws: int = 32, seed: int = 0,
+                    level: float = 0.9) -> dict:
+    """Push n_draws posterior samples through the simulator as one batch; coverage of the
+    emulator's `level` predictive interval per response.
+
+    Returns {"coverage": {name: fraction}, "n": draws used (finite runs), "z": (n, m)
+    standardized residuals (ln sim - mean) / sd, "thetas", "simulated"}.
+    """
+    rng = np.random.default_rng(seed)
+    n = min(int(n_draws), samples.shape[0])
+    thetas = samples[rng.choice(samples.shape[0], size=n, replace=False)]
+    y = np.asarray(sim.evaluate(thetas), float)
+    mu, var = emulator.predict(thetas)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = (np.log(y) - mu) / np.sqrt(var)
+    zq = float(stats.norm.ppf(0.5 + level / 2))
+    ok = np.all(np.isfinite(z), axis=1)
+    cover = {name: float(np.mean(np.abs(z[ok, i]) <= zq)) if ok.any() else float("nan")
+             for i, name in enumerate(emulator.names)}
+    return {"coverage": cover, "level": level, "n": int(ok.sum()), "n_requested": n,
+            "z": z, "thetas": thetas, "simulated": y}

@@ -1,0 +1,119 @@
+"""What a calibration writes: the study's Table 4-4, Figure 4-6, the calibrated tire, a summary.
+
+- table_4_4.csv / table_4_4.md: per target the measured value, the simulated value at the best
+  evaluation and the error (%), in the target's unit, with the study's numbers beside ours when
+  the config gives them ([anchor]); a total row.
+- figure_4_6.png: each target's error (%) against evaluation number, and the total error with
+  its running best (log scale).
+- calibrated_tire.toml: the input tire TOML with the calibrated values (calibration.tire_toml).
+- summary.json: best parameters (SI and file units), responses, errors, stop reason, cost in
+  evaluations, batches, forward-run equivalents and simulator wall time.
+"""
+
+from pathlib import Path
+
+import numpy as np
+
+from .tire_toml import write_calibrated_tire
+from ..io import atomic_savefig, atomic_write_csv, atomic_write_json, atomic_write_text
+
+__all__ = ["table_4_4", "format_markdown", "plot_errors", "write_outputs"]
+
+
+def table_4_4(result, spec) -> list:
+    """Rows (dicts) of Table 4-4 for a CalibrationResult and its CalibrationSpec."""
+    rows = []
+    for t, v, e in zip(spec.targets, result.values, result.errors_pct):
+        a = spec.anchor.get(t.name, {})
+        rows.append({"target": t.name, "experiment": t.experiment, "quantity": t.quantity,
+                     "unit": t.unit, "measured": t.measured / t.unit_factor,
+                     "simulated": float(v) / t.unit_factor, "error_pct": float(e),
+                     "study_simulated": a.get("simulated"), "study_error_pct": a.get("error_percent")})
+    rows.append({"target": "total", "experiment": "", "quantity": "sum of |errors|", "unit": "%",
+                 "measured": None, "simulated": None, "error_pct": result.total_error_pct,
+                 "study_simulated": None,
+                 "study_error_pct": spec.anchor.get("total", {}).get("error_percent")})
+    return rows
+
+
+def _f(v, digits=6):
+    return "" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.{digits}g}"
+
+
+def format_markdown(rows) -> str:
+    head = ("| target | experiment | measured | simulated | error % | study simulated | "
+            "study error % |\n|---|---|---|---|---|---|---|\n")
+    body = "".join(
+        f"| {r['target']} | {r['experiment']} | {_f(r['measured'])} {r['unit'] if r['measured'] is not None else ''} | "
+        f"{_f(r['simulated'])} | {_f(r['error_pct'], 4)} | {_f(r['study_simulated'])} | "
+        f"{_f(r['study_error_pct'], 4)} |\n" for r in rows)
+    return head + body
+
+
+def plot_errors(records, targets, path, title: str = "") -> Path:
+    """Figure 4-6: every target's error and the total against evaluation number."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = np.arange(1, len(records) + 1)
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    for i, t in enumerate(targets):
+        e = np.array([np.nan if r["errors_pct"][t.name] is None else r["errors_pct"][t.name]
+                      for r in records], float)
+        ax.plot(n, e, ls="none", marker="o", ms=3.5, color=f"C{i}", label=f"{t.name} error")
+    tot = np.array([np.nan if r["total_error_pct"] is None else r["total_error_pct"]
+                    for r in records], float)
+    ax.plot(n, tot, ls="none", marker="x", ms=4, color="k", label="total error")
+    best = np.fmin.accumulate(np.where(np.isfinite(tot), tot, np.inf))
+    ax.step(n, np.where(np.isfinite(best), best, np.nan), where="post", color="k", lw=1.5,
+            label="best total so far")
+    batches = [r["batch"] for r in records]
+    for k in range(1, len(records)):
+        if batches[k] != batches[k - 1]:
+            ax.axvline(k + 0.5, color="0.85", lw=0.6, zorder=0)
+    ax.set_yscale("log")
+    ax.set_xlabel("evaluation number (grey lines: batches)")
+    ax.set_ylabel("error (%)")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    return atomic_savefig(fig, path, dpi=120)
+
+
+def write_outputs(result, spec, out_dir, title: str = "", sim=None) -> dict:
+    """Write every output of a calibration into out_dir; returns {name: path}."""
+    out_dir = Path(out_dir)
+    rows = table_4_4(result, spec)
+    paths = {"table_csv": atomic_write_csv(out_dir / "table_4_4.csv", None,
+                                           {k: [r[k] for r in rows] for k in rows[0]}),
+             "table_md": atomic_write_text(out_dir / "table_4_4.md", format_markdown(rows))}
+    if result.records:
+        paths["figure"] = plot_errors(result.records, spec.targets, out_dir / "figure_4_6.png", title)
+    space = spec.space
+    if np.all(np.isfinite(result.theta)):
+        header = (f"Calibrated by `jtire calibrate {spec.path.name}` ({result.method}, "
+                  f"{result.n_evaluations} evaluations, stop: {result.stop_reason}); total error "
+                  f"{result.total_error_pct:.4g} %.\nStarting tire: {spec.tire_path}")
+        paths["tire"], _ = write_calibrated_tire(out_dir / "calibrated_tire.toml",
+                                                 spec.tire_path.read_text(), space, result.theta,
+                                                 header)
+    summary = {
+        "config": str(spec.path), "method": result.method, "stop_reason": result.stop_reason,
+        "n_evaluations": result.n_evaluations, "n_jacobians": result.n_jacobians,
+        "n_batches": result.n_batches,
+        "cost_forward_equivalents": result.cost_forward, "simulator_wall_s": result.wall_s,
+        "total_error_pct": result.total_error_pct,
+        "errors_pct": dict(zip(spec.response_names, result.errors_pct.tolist())),
+        "responses_SI": dict(zip(spec.response_names, result.values.tolist())),
+        "theta": result.theta.tolist(),
+        "parameters_SI": space.values(result.theta) if np.all(np.isfinite(result.theta)) else {},
+        "parameters_file_units": [{"table": t, "key": k, "value": v, "unit": u}
+                                  for t, k, v, u in space.file_values(result.theta)]
+        if np.all(np.isfinite(result.theta)) else [],
+        "simulator": None if sim is None else sim.fingerprint(),
+    }
+    paths["summary"] = atomic_write_json(out_dir / "summary.json", summary)
+    return paths

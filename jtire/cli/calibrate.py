@@ -1,0 +1,73 @@
+"""`jtire calibrate CONFIG`: tune the tire's free parameters to the calibration targets (the work
+is `jtire.calibration.tire_calibration`).
+
+Outputs in --out: fingerprint.json, history.jsonl (every evaluation; rerun the same command to
+resume a killed run), table_4_4.csv/.md, figure_4_6.png, calibrated_tire.toml, summary.json.
+"""
+
+from pathlib import Path
+
+
+def add_arguments(parser):
+    parser.add_argument("config", metavar="CONFIG",
+                        help="calibration TOML, e.g. configs/calibration/study.toml")
+    parser.add_argument("--out", default=None,
+                        help="output folder (default runs/calibrate/<config name>); resumes from it")
+    parser.add_argument("--method", choices=("arsm", "lm"), default=None,
+                        help="arsm (response surfaces, batches) or lm (Levenberg-Marquardt with "
+                        "the simulator's Jacobian); default: the config's")
+    parser.add_argument("--budget", type=float, default=None,
+                        help="ARSM evaluations or LM forward-run equivalents (default: the config's)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a config field, e.g. --set arsm.seed=3 or "
+                        "--set tire.mesh.n_theta=48 (repeatable)")
+    parser.add_argument("--standin", action="store_true",
+                        help="use the closed-form STAND-IN simulator (a dry run of the machinery, "
+                        "not physics)")
+
+
+def simulator_for(spec, standin: bool, say):
+    """The shell simulator (calibration.simulator.make_simulator) or the stand-in; a missing
+    shell simulator is reported as one line (returns None)."""
+    from ..calibration.simulator import make_simulator
+    from ..calibration.standin import StandinSimulator
+
+    if standin:
+        say("simulator: closed-form STAND-IN (not physics)", err=True)
+        return StandinSimulator(spec.space, spec.base_params, spec.targets)
+    try:
+        return make_simulator(spec, spec.tire)
+    except NotImplementedError as e:
+        say(f"jtire calibrate: error: {e} (not available yet; --standin runs the machinery on a stand-in)",
+            err=True)
+        return None
+
+
+def run_cli(args, say) -> int:
+    from ..calibration.spec import load_calibration
+    from ..calibration.tire_calibration import run_calibration
+    from ..errors import ConfigError
+
+    spec = load_calibration(args.config, args.set)
+    if args.budget is not None and not args.budget >= 1:
+        raise ConfigError(f"--budget = {args.budget:g}: must be >= 1")
+    sim = simulator_for(spec, args.standin, say)
+    if sim is None:
+        return 2
+    out = Path(args.out) if args.out else Path("runs") / "calibrate" / (
+        Path(args.config).stem + ("_standin" if args.standin else ""))
+
+    def progress(res):
+        say(f"  {res.n_evaluations} evaluations, best total error {res.total_error_pct:.4g} %",
+            err=True)
+
+    res, paths = run_calibration(spec, sim, out, args.method, args.budget, progress)
+    from ..calibration.report import format_markdown, table_4_4
+
+    say(format_markdown(table_4_4(res, spec)).rstrip())
+    say(f"{res.method}: {res.n_evaluations} evaluations and {res.n_jacobians} Jacobian calls in "
+        f"{res.n_batches} batches, "
+        f"{res.cost_forward:.0f} forward-run equivalents, simulator wall {res.wall_s:.1f} s; "
+        f"stop: {res.stop_reason}")
+    say("wrote " + ", ".join(str(p) for p in paths.values()))
+    return 0

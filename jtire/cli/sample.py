@@ -1,0 +1,78 @@
+"""`jtire sample CONFIG`: the posterior of a calibration's free parameters (emcee through an
+emulator trained on the calibration's simulator runs; the work is `jtire.calibration.sampling`).
+
+Rerun the same command to resume a killed chain. --check runs posterior draws through the
+simulator (one batch) and reports the emulator's interval coverage.
+"""
+
+from pathlib import Path
+
+import numpy as np
+
+
+def add_arguments(parser):
+    parser.add_argument("config", metavar="CONFIG", help="posterior TOML, e.g. "
+                        "configs/calibration/posterior.toml")
+    parser.add_argument("--out", default=None, help="output folder (default runs/sample/<config>)")
+    parser.add_argument("--history", default=None,
+                        help="the calibration's output folder (default: the config's history)")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a field, e.g. --set sampler.max_steps=5000 (repeatable)")
+    parser.add_argument("--check", action="store_true",
+                        help="run [check] draws posterior samples through the simulator")
+    parser.add_argument("--standin", action="store_true",
+                        help="the closed-form STAND-IN simulator for --check (not physics)")
+
+
+def run_cli(args, say) -> int:
+    import dataclasses
+
+    from ..calibration.posterior_spec import load_posterior
+    from ..calibration.sampling import run_posterior
+    from .calibrate import simulator_for
+
+    spec = load_posterior(args.config, args.set)
+    if args.history:
+        spec = dataclasses.replace(spec, history=Path(args.history))
+    sim = None
+    if args.check:
+        sim = simulator_for(spec.calibration, args.standin, say)
+        if sim is None:
+            return 2
+    out = Path(args.out) if args.out else Path("runs") / "sample" / Path(args.config).stem
+
+    def progress(steps, tau):
+        t = f"{np.max(tau):.1f}" if np.all(np.isfinite(tau)) else "n/a"
+        say(f"  {steps} steps, max tau {t}", err=True)
+
+    r = run_posterior(spec, out, sim, progress)
+    res, diag = r["result"], r["diagnostics"]
+    emu = r["emulator"]
+    say(f"emulator ({emu.n_points} simulator runs), leave-one-out RMSE of ln(response):")
+    for name, kind in zip(emu.names, emu.kinds):
+        scores = ", ".join(f"{k} {v:.3g}" for k, v in emu.loo[name].items())
+        say(f"  {name}: chose {kind}  ({scores})")
+    for name, src in zip(emu.names, r["sigma_sources"]):
+        say(f"  measurement sd {name}: {src}")
+    verdict = ("converged" if res.converged else
+               f"NOT CONVERGED: stopped at the budget of {res.steps} steps, which is not longer "
+               f"than {res.n_tau:g} x max tau")
+    say(f"chain: {res.steps} steps x {res.chain.shape[1]} walkers ({res.n_new_steps} new), "
+        f"max tau {np.nanmax(res.tau):.1f}: {verdict}")
+    say(f"acceptance fraction {diag['acceptance_mean']:.3f} (min {diag['acceptance_min']:.3f}); "
+        f"R-hat max {np.nanmax(diag['rhat']):.4f}; bulk ESS min {np.nanmin(diag['ess_bulk']):.0f}")
+    say("posterior predictive (median [90 % interval]) beside the targets:")
+    for row in r["predictive"]:
+        say(f"  {row['target']:<5} {row['what']:<22} measured {row['measured']:.5g} {row['unit']:<5}"
+            f" median {row['median']:.5g} [{row['lower']:.5g}, {row['upper']:.5g}]")
+    say("posterior / prior 90 % width in ln p (smallest first):")
+    for row in sorted(r["widths"], key=lambda w: w["ratio"])[:8]:
+        say(f"  {row['parameter']:<40} {row['ratio']:.3f}")
+    if "check" in r:
+        c = r["check"]
+        say(f"simulator check ({c['n']} of {c['n_requested']} draws, one batch): coverage of the "
+            f"emulator's {c['level']:.0%} intervals: "
+            + ", ".join(f"{k} {v:.2f}" for k, v in c["coverage"].items()))
+    say(f"wrote {out}/ (chain.h5, diagnostics.json, predictive.csv, widths.csv, corner.png, "
+        "emulator.json)")
+    return 0 if res.converged else 1
