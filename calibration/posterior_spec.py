@@ -15,7 +15,8 @@ import dataclasses
 import math
 from pathlib import Path
 
-from ..config import F, apply_overrides, load_toml, validate_table
+from ..schema import Field as F
+from ..config import apply_overrides, load_toml, validate_table
 from ..errors import ConfigError
 from .emulator import CANDIDATES
 from .spec import load_calibration

@@ -71,4 +71,6 @@ def check_batch(sim: Simulator, thetas, values) -> np.ndarray:
 def make_simulator(config, tire_spec) -> Simulator:
     """The shell-model simulator for a calibration config (calibration.spec.CalibrationSpec:
     its space, targets and base_params) and a validated tire (jtire.config.TireSpec)."""
-    raise NotImplementedError("shell simulator: wired by the batched runner")
+    from .shell import ShellSimulator
+
+    return ShellSimulator(config, tire_spec)

@@ -21,7 +21,8 @@ import dataclasses
 import math
 from pathlib import Path
 
-from ..config import F, apply_overrides, load_toml, tire_from_dict, validate_table
+from ..schema import Field as F
+from ..config import apply_overrides, load_toml, tire_from_dict, validate_table
 from ..errors import ConfigError
 from .arsm_multi import DEFAULT_SURFACE, FILLS, RULES, WEIGHTINGS
 from .response_surfaces import KINDS

@@ -2,7 +2,7 @@
 
 A target table in a calibration config ([targets.NAME]):
 
-    experiment = "vertical_stiffness"       # a jtire experiment (jtire.experiments.registry)
+    experiment = "vertical_stiffness"       # a jtire experiment (jtire.experiments.REGISTRY)
     quantity = "deflection_m"               # optional: the experiment's default response below
     condition = { load_kg = 4625.0, pressure_psi = 120.0 }
     table = { stated_load_kN = 50.0 }       # the experiment's own table (validated, SI inside)
@@ -82,7 +82,7 @@ def _track_linear(load_n: float, data_dir=None) -> tuple:
 
 def parse_targets(raw, data_dir=None) -> tuple:
     """[targets.*] -> tuple of Target, in config order."""
-    from ..experiments.registry import REGISTRY  # the experiments and their table schemas
+    from ..experiments import REGISTRY  # the experiments and their table schemas
 
     if not isinstance(raw, dict) or not raw:
         raise ConfigError("targets: missing; give one table [targets.NAME] per measured response")

@@ -76,10 +76,26 @@ def atomic_write_csv(path, header, rows) -> Path:
     return atomic_write_text(path, buf.getvalue())
 
 
+def drop_torn_tail(path) -> None:
+    """Cut a JSON-lines file back to its last complete line: a kill during an append leaves a torn
+    last line, and the next append would glue onto it (making both unreadable)."""
+    path = Path(path)
+    if not path.exists():
+        return
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        with open(path, "r+b") as f:
+            f.truncate(data.rfind(b"\n") + 1)
+            f.flush()
+            os.fsync(f.fileno())
+
+
 def append_jsonl(path, record: dict) -> None:
-    """Append one record and fsync, so a completed record survives a kill at any moment."""
+    """Append one record and fsync, so a completed record survives a kill at any moment (a torn
+    line left by an earlier kill is cut off first)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    drop_torn_tail(path)
     with open(path, "a") as f:
         f.write(json.dumps(_jsonable(record)) + "\n")
         f.flush()

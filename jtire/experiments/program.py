@@ -100,8 +100,15 @@ def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
     y, t = y0, f64(0.0)
     mem = {k: f64(v) for k, v in mem0.items()}
     outs = []
-    for branch in branches:
+    for i, branch in enumerate(branches):
         ph, mem = branch(y, t, mem)
+        if i == 0:
+            # tie the start state and time to the case (+ 0 dt): under vmap they then carry the batch
+            # axis like every later phase's, so the first phase shares the later phases' compiled
+            # program instead of compiling one of its own (unbatched start state)
+            z = 0.0 * ph.drive.dt
+            ph = eqx.tree_at(lambda p: p.y0, ph, jax.tree_util.tree_map(lambda a: a + z.astype(a.dtype), ph.y0))
+            t = t + z
         out, y = run_one(model, params, ph, t, ke_tol, n_save)
         outs.append(out)
         t = out.t_end

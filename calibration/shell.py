@@ -1,0 +1,160 @@
+"""The shell-model simulator behind calibration, sensitivities and the posterior check.
+
+`ShellSimulator` implements `calibration.simulator.Simulator` on the batch runner: a batch of
+log-parameter vectors becomes one batch per experiment the targets use (every parameter set x every
+condition of that experiment, vmapped and sharded over the devices), reduced on the host exactly as
+`jtire run` reduces it. Its Jacobian is forward-mode autodiff through the same programs (vmapped
+tangents, one per free parameter) with the experiments' traced reductions (`Experiment.traced`); the
+explicit step of each case is held fixed (it is a numerical setting, not physics).
+
+Sensitivity quantities beyond the targets (k_sv, k_l, k_by, k_btheta, k_bgamma, k_f, k_m, footprint
+length and width, rolling resistance) come from the experiments' traced reductions at the rated
+condition (`SENSITIVITY`).
+"""
+
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .. import batch
+from .. import units as U
+from ..config import parse_solver
+from ..experiments import REGISTRY, Case, Protocol
+from .simulator import Simulator
+
+RATED = {"load_N": 4625.0 * U.G0, "pressure_Pa": 120.0 * U.PSI}
+# quantity -> (experiment, table overrides) for sensitivities at the rated condition
+SENSITIVITY = {
+    "k_sv_N_per_m": ("vertical_stiffness", {}), "deflection_m": ("vertical_stiffness", {}),
+    "k_l_N_per_m": ("lateral_stiffness", {"decay_s": 0.0}), "lateral_deflection_m": ("lateral_stiffness", {"decay_s": 0.0}),
+    "contact_length_m": ("footprint", {}), "contact_width_m": ("footprint", {}),
+    "k_btheta_Nm_per_rad": ("inplane_rotation", {}), "k_by_N_per_m": ("sidewall_translation", {}),
+    "k_bgamma_Nm_per_rad": ("sidewall_camber", {}),
+    "k_f_N_per_rad": ("cornering", {"slip_angles_deg": [0.0, 1.0, 2.0, 3.0]}),
+    "k_m_Nm_per_rad": ("cornering", {"slip_angles_deg": [0.0, 1.0, 2.0, 3.0]}),
+    "rolling_resistance_N": ("rolling_resistance", {}),
+}
+
+
+def _table(name, overrides):
+    from ..config import validate_table
+
+    raw = dict(overrides)
+    if "slip_angles_deg" in raw:  # the table is validated in the file's units
+        raw["slip_angles_deg"] = list(raw["slip_angles_deg"])
+    return validate_table(raw, REGISTRY[name].schema, name)
+
+
+class ShellSimulator(Simulator):
+    def __init__(self, spec, tire_spec, solver=None, devices=None):
+        from ..tire import make_tire
+
+        self.spec = spec
+        self.space = spec.space
+        self.response_names = spec.response_names
+        self.tire = make_tire(tire_spec)
+        self.base = spec.base_params
+        self.proto = Protocol.from_dict(parse_solver(solver or {}))
+        self.devices = devices
+        # targets grouped by (experiment, table): one experiment instance, several conditions
+        from ..fingerprint import plain
+
+        self.groups = []
+        for j, t in enumerate(spec.targets):
+            exp = REGISTRY[t.experiment].from_table(t.table, self.proto, tire_spec)
+            key = (exp.name, repr(plain(exp)))
+            for g in self.groups:
+                if g["key"] == key:
+                    g["targets"].append((j, t))
+                    break
+            else:
+                self.groups.append({"key": key, "exp": exp, "targets": [(j, t)]})
+        self.cost_forward_equivalents = {"evaluate": 1.0, "jacobian": float("nan")}
+        self.last_wall = {}
+
+    def fingerprint(self) -> dict:
+        from ..fingerprint import code_version, plain
+
+        return {"simulator": "shell", "mesh": {"n_theta": self.tire.spec.n_theta, "n_side": self.tire.spec.n_side,
+                                               "n_crown": self.tire.spec.n_crown,
+                                               "contact_subpoints": self.tire.spec.contact_subpoints},
+                "solver": plain(self.proto), "jtire": code_version()}
+
+    def params(self, theta):
+        return self.space.to_params(jnp.asarray(theta, dtype=jnp.float64), self.base)
+
+    def evaluate(self, thetas) -> np.ndarray:
+        thetas = np.atleast_2d(np.asarray(thetas, float))
+        n = len(thetas)
+        out = np.full((n, len(self.response_names)), np.nan)
+        plist = [self.params(th) for th in thetas]
+        for g in self.groups:
+            exp, tg = g["exp"], g["targets"]
+            conds = [t.condition for _, t in tg]
+            t0 = time.perf_counter()
+            res = batch.run(exp, self.tire, [c for _ in range(n) for c in conds],
+                            params_list=[p for p in plist for _ in conds], devices=self.devices)
+            self.last_wall[exp.name] = time.perf_counter() - t0
+            for i in range(n):
+                for k, (j, t) in enumerate(tg):
+                    r = res[i * len(conds) + k]
+                    if not isinstance(r, batch.CaseFailure):
+                        out[i, j] = float(r.quantities[t.quantity])
+        return out
+
+    def jacobian(self, theta, quantities=None):
+        """(values (q,), J (q, d)) by forward-mode autodiff (jacfwd: one tangent per parameter)."""
+        theta = np.asarray(theta, float)
+        if quantities is None:
+            jobs = [(g["exp"], [t.condition for _, t in g["targets"]], [t.quantity for _, t in g["targets"]],
+                     [j for j, _ in g["targets"]]) for g in self.groups]
+            names = list(self.response_names)
+        else:
+            names = list(quantities)
+            jobs = []
+            for k, q in enumerate(names):
+                if q not in SENSITIVITY:
+                    raise KeyError(f"{q}: no traced reduction (known: {', '.join(SENSITIVITY)})")
+                ename, over = SENSITIVITY[q]
+                exp = REGISTRY[ename].from_table(_table(ename, over), self.proto, self.tire.spec)
+                cond = RATED if REGISTRY[ename].needs_load else {"pressure_Pa": RATED["pressure_Pa"]}
+                jobs.append((exp, [cond], [q], [k]))
+        values = np.full(len(names), np.nan)
+        J = np.full((len(names), self.space.d), np.nan)
+        t0 = time.perf_counter()
+        for exp, conds, qs, idx in jobs:
+            v, jac = traced_jacobian(exp, self.tire, self.params, theta, conds, qs)
+            values[idx] = v
+            J[idx] = jac
+        self.last_wall["jacobian"] = time.perf_counter() - t0
+        return values, J
+
+
+def traced_jacobian(exp, tire, params_of, theta, conditions, quantities):
+    """Values (k,) and Jacobian (k, d) of `quantities` (one per condition, paired in order) of `exp`
+    with respect to theta, by jax.jacfwd through the simulation (steps held at their values)."""
+    model = tire.model
+    base = params_of(theta)
+    flat = [(i, c) for i, cond in enumerate(conditions) for c in exp.cases(cond)]
+    dts = batch.stable_steps(model, [base] * len(flat), [c["pressure_Pa"] for _, c in flat],
+                             float(exp.proto.settle_damping))
+    cases = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *[
+        Case.of(c.get("load_N", 0.0), c["pressure_Pa"], dts[k], exp.aux(c)) for k, (_, c) in enumerate(flat)])
+
+    def f(th):
+        outs = batch.simulate_batch(exp, model, params_of(th), cases)
+        vals = []
+        for i, cond in enumerate(conditions):
+            mine = [jax.tree_util.tree_map(lambda a: a[k], outs) for k, (ii, _) in enumerate(flat) if ii == i]
+            cc = [c for ii, c in flat if ii == i]
+            vals.append(exp.traced(model, params_of(th), cc, mine)[quantities[i]])
+        return jnp.stack(vals)
+
+    def with_value(th):
+        v = f(th)
+        return v, v
+
+    J, v = jax.jacfwd(with_value, has_aux=True)(jnp.asarray(theta, dtype=jnp.float64))
+    return np.asarray(v), np.asarray(J)
