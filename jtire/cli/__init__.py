@@ -19,6 +19,7 @@ SUBCOMMANDS = {
     "sweep": ("jtire.cli.sweep", "run an experiment over the load x pressure grid (vmapped)"),
     "compete": ("jtire.cli.compete", "ARSM vs GA vs Monte Carlo on the soil-block simulation"),
     "data": ("jtire.cli.data", "measured test-track and sandbox rolling-resistance tables and fits"),
+    "characterize": ("jtire.cli.characterize", "every experiment over the load x pressure grid: rigid-ring tables, trends, .tir"),
     "export-tir": ("jtire.cli.export_tir", "rigid-ring tables, trends, MF fit and an MF 6.1 .tir from a characterization"),
     "calibrate": ("jtire.cli.calibrate", "tune the tire's parameters to the calibration targets (ARSM or Levenberg-Marquardt)"),
     "sample": ("jtire.cli.sample", "posterior of the calibrated parameters (emcee on an emulator of the targets)"),

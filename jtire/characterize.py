@@ -1,0 +1,238 @@
+"""The virtual test programme over the condition grid: every experiment at every load x pressure, into
+the rigid-ring tables, trend verdicts, a Magic Formula fit and an MF-Swift `.tir`.
+
+A characterization config (`configs/characterize.toml`) names the tire file, the experiments (default:
+all), the grid (loads in kg, pressures in psi; the study's 3 x 3 by default), the solver and any
+experiment table. Each experiment runs as batches of its grid cases through `jtire.batch` (E05, E07, E08
+once per pressure: the load does not enter; E10 at every slip angle of every condition, one case each;
+E11 is sigma = k_f / k_l from E10 and E09 at each condition). Every case is saved the moment its batch
+returns (`DIR/<experiment>/cases/<case>/result.json`, `signals.csv`); `DIR/settings.json` holds
+everything that determines the numbers, so a killed run resumes with nothing recomputed and a rerun with
+other settings refuses.
+"""
+
+import dataclasses
+import json
+from pathlib import Path
+
+from . import batch
+from . import units as U
+from .config import parse_solver, read_toml, tire_from_dict, validate_table
+from .errors import ConfigError
+from .fingerprint import claim_folder, code_version
+from .io import atomic_write_csv, atomic_write_text, check_writable
+from .schema import Field
+
+DEFAULT_EXPERIMENTS = ("footprint", "vertical_stiffness", "drum_cleat", "drop_test", "inplane_rotation", "traction",
+                       "sidewall_translation", "sidewall_camber", "lateral_stiffness", "cornering", "rolling_resistance")
+GRID_SCHEMA = {
+    "loads_kg": Field(list, U.G0, 50, 50000, [2312.5, 4625.0, 6937.5], "kg"),
+    "pressures_psi": Field(list, U.PSI, 10, 250, [70.0, 120.0, 150.0], "psi"),
+    "rated_load_kg": Field(float, U.G0, 50, 50000, 4625.0, "kg"),
+    "rated_pressure_psi": Field(float, U.PSI, 10, 250, 120.0, "psi"),
+}
+TOP_KEYS = {"description", "tire_file", "experiments", "grid", "solver"}
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """A validated characterization: tire, experiments (instances), grid conditions, rated condition."""
+
+    path: Path
+    tire: object
+    tire_path: Path
+    experiments: tuple
+    conditions: tuple  # load x pressure, SI dicts
+    pressures: tuple  # Pa
+    rated: dict
+    solver: dict
+
+
+def load_plan(path, tire_file=None, overrides=()) -> Plan:
+    from .config import apply_overrides
+    from .experiments import REGISTRY
+    from .experiments.phases import Protocol
+
+    path = Path(path)
+    raw = read_toml(path)
+    tire_over = [o[len("tire."):] for o in overrides if o.startswith("tire.")]
+    apply_overrides(raw, [o for o in overrides if not o.startswith("tire.")])
+    for key in raw:
+        if key not in TOP_KEYS and key not in REGISTRY:
+            raise ConfigError(f"{key}: unknown field (allowed: {', '.join(sorted(TOP_KEYS))} and experiment tables)")
+    names = raw.get("experiments", list(DEFAULT_EXPERIMENTS))
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        raise ConfigError("experiments: must be a list of experiment names")
+    for n in names:
+        if n not in REGISTRY:
+            raise ConfigError(f"experiments: {n!r} unknown (known: {', '.join(REGISTRY)})")
+        if n == "relaxation_length":
+            raise ConfigError("experiments: relaxation_length is derived here from cornering and lateral_stiffness; "
+                              "list those instead")
+    if tire_file is not None:
+        tire_path = Path(tire_file).resolve()
+    elif isinstance(raw.get("tire_file"), str):
+        tire_path = (path.parent / raw["tire_file"]).resolve()
+    else:
+        raise ConfigError("tire_file: missing (path of the tire TOML, relative to this config), or give --tire")
+    tire_raw = apply_overrides(read_toml(tire_path, "tire file"), tire_over)
+    tire = tire_from_dict(tire_raw)
+    solver = parse_solver(raw.get("solver", {}))
+    proto = Protocol.from_dict(solver)
+    exps = tuple(REGISTRY[n].from_table(validate_table(raw.get(n, {}), REGISTRY[n].schema, n), proto, tire)
+                 for n in names)
+    g = validate_table(raw.get("grid", {}), GRID_SCHEMA, "grid")
+    for key in ("loads_kg", "pressures_psi"):
+        if len(set(g[key])) != len(g[key]):
+            raise ConfigError(f"grid.{key}: lists a value twice")
+    conditions = tuple({"pressure_Pa": p, "load_N": w} for p in g["pressures_psi"] for w in g["loads_kg"])
+    for e in exps:
+        if hasattr(e, "check_condition"):
+            for c in conditions:
+                e.check_condition(c)
+    rated = {"load_N": g["rated_load_kg"], "pressure_Pa": g["rated_pressure_psi"]}
+    if not any(abs(c["load_N"] - rated["load_N"]) < 1e-6 and abs(c["pressure_Pa"] - rated["pressure_Pa"]) < 1e-3
+               for c in conditions):
+        raise ConfigError("grid.rated_load_kg, grid.rated_pressure_psi: must be one of the grid's conditions")
+    return Plan(path, tire, tire_path, exps, conditions, tuple(g["pressures_psi"]), rated, solver)
+
+
+def experiment_conditions(plan: Plan, exp) -> list:
+    return [{"pressure_Pa": p} for p in plan.pressures] if exp.per_pressure else list(plan.conditions)
+
+
+def case_name(i: int, c: dict) -> str:
+    name = f"{i:03d}_p{c['pressure_Pa'] / U.PSI:.4g}psi"
+    if "load_N" in c:
+        name += f"_l{c['load_N'] / U.G0:.6g}kg"
+    return name
+
+
+def settings(plan: Plan) -> dict:
+    return {"tire": plan.tire, "experiments": {e.name: e for e in plan.experiments}, "conditions": plan.conditions,
+            "solver": plan.solver, "rated": plan.rated, "jtire": code_version()}
+
+
+def run(plan: Plan, out, batch_size: int = 0, progress=None, on_case=None) -> dict:
+    """Run every experiment of the plan into `out` (resuming). Returns {experiment: [result dicts or
+    None (failed), one per condition]}. progress: a callable(n_done_increment) or None; on_case(name,
+    condition, error_or_None) after every case."""
+    from .tire import make_tire
+
+    out = Path(out)
+    check_writable(out)
+    claim_folder(out, settings(plan))
+    tire = None
+    results = {}
+    for exp in plan.experiments:
+        conds = experiment_conditions(plan, exp)
+        folder = out / exp.name / "cases"
+        names = [case_name(i, c) for i, c in enumerate(conds)]
+        todo = [i for i, n in enumerate(names) if not (folder / n / "result.json").exists()]
+        if todo:
+            tire = tire or make_tire(plan.tire)
+
+            def save(k, res, todo=todo, names=names, conds=conds, folder=folder):
+                i = todo[k]
+                if isinstance(res, batch.CaseFailure):
+                    atomic_write_text(folder / names[i] / "error.txt", f"{res.error}\n")
+                    err = res.error
+                else:
+                    res.write(folder / names[i])
+                    (folder / names[i] / "error.txt").unlink(missing_ok=True)
+                    err = None
+                if progress is not None:
+                    progress(len(exp.cases(conds[i])))
+                if on_case is not None:
+                    on_case(f"{exp.name}/{names[i]}", conds[i], err)
+
+            batch.run(exp, tire, [conds[i] for i in todo], batch=batch_size, on_result=save)
+        results[exp.name] = [_read(folder / n / "result.json") for n in names]
+        _summary(out / exp.name, names, conds, results[exp.name], exp.per_pressure)
+    return results
+
+
+def total_cases(plan: Plan, out=None) -> tuple:
+    """(all cases, cases already done in `out`) counted in simulated cases (E10: one per slip angle)."""
+    total = done = 0
+    for exp in plan.experiments:
+        for i, c in enumerate(experiment_conditions(plan, exp)):
+            n = len(exp.cases(c))
+            total += n
+            if out is not None and (Path(out) / exp.name / "cases" / case_name(i, c) / "result.json").exists():
+                done += n
+    return total, done
+
+
+def _read(path):
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def _signals(result_json_path):
+    import csv
+
+    p = Path(result_json_path).parent / "signals.csv"
+    if not p.exists():
+        return None
+    rows = list(csv.DictReader(p.open()))
+    return {k: [float(r[k]) if r[k] not in ("", "None") else float("nan") for r in rows] for k in rows[0]} if rows else None
+
+
+def _summary(folder, names, conds, results, per_pressure):
+    keys, rows = [], []
+    for n, c, r in zip(names, conds, results):
+        q = {} if r is None else {k: v for k, v in r["quantities"].items() if isinstance(v, (int, float)) or v is None}
+        keys += [k for k in q if k not in keys]
+        rows.append((n, c, q))
+    cols = ["case", "pressure_Pa"] + ([] if per_pressure else ["load_N"])
+    atomic_write_csv(Path(folder) / "summary.csv", cols + keys,
+                     [[n] + [c[k] for k in cols[1:]] + [q.get(k) for k in keys] for n, c, q in rows])
+
+
+def tire_info(plan: Plan):
+    """The rigid-ring TireInfo of the characterized tire (from its config; the model's own inertias
+    where the config gives none)."""
+    from .mesh import build_mesh
+    from .rigid_ring.table import TireInfo
+
+    s = plan.tire
+    g = s.geometry
+    own = build_mesh(g, s.masses, s.n_theta, s.n_side, s.n_crown).masses()
+    return TireInfo(name=s.size or plan.tire_path.stem, m_b_kg=s.masses.belt, m_tot_kg=s.masses.tire + s.masses.rim,
+                    tire_mass_kg=s.masses.tire, rim_mass_kg=s.masses.rim,
+                    I_by_kgm2=s.reference["belt_Iy_kgm2"] or own["belt_Iy_kgm2"],
+                    I_bx_kgm2=s.reference["belt_Ix_kgm2"] or own["belt_Ix_kgm2"],
+                    I_ay_kgm2=s.masses.rim_Iy, I_ax_kgm2=s.masses.rim_Ixz, unloaded_radius_m=g.outer_radius,
+                    width_m=g.section_width, rim_radius_m=g.rim_radius, rim_width_m=g.rim_width,
+                    aspect_ratio=g.section_height / g.section_width, rated_load_N=plan.rated["load_N"],
+                    rated_pressure_Pa=plan.rated["pressure_Pa"])
+
+
+def characterization(plan: Plan, out, results: dict):
+    """The rigid-ring Characterization of the finished (or partial) run: one row per grid condition,
+    quantities merged from every experiment at that condition (per-pressure ones by pressure), E11's
+    sigma = k_f / k_l, and E10's curves."""
+    from .rigid_ring.table import Characterization, row_from_results
+
+    out = Path(out)
+    by_name = {e.name: e for e in plan.experiments}
+    rows = []
+    for c in plan.conditions:
+        parts, e10 = [], None
+        for name, res_list in results.items():
+            conds = experiment_conditions(plan, by_name[name])
+            for i, (cc, r) in enumerate(zip(conds, res_list)):
+                if r is None or abs(cc["pressure_Pa"] - c["pressure_Pa"]) > 1e-6:
+                    continue
+                if "load_N" in cc and abs(cc["load_N"] - c["load_N"]) > 1e-6:
+                    continue
+                parts.append(r)
+                if name == "cornering":
+                    e10 = _signals(out / name / "cases" / case_name(i, cc) / "result.json")
+        q = {}
+        for r in parts:
+            q |= r["quantities"]
+        if q.get("k_f_N_per_rad") and q.get("k_l_N_per_m"):
+            parts.append({"quantities": {"sigma_m": q["k_f_N_per_rad"] / q["k_l_N_per_m"]}})
+        rows.append(row_from_results(c["load_N"], c["pressure_Pa"], parts, e10_signals=e10))
+    return Characterization(tire_info(plan), rows)

@@ -1,0 +1,57 @@
+"""`jtire characterize [CONFIG] [--tire TIRE.toml] [--out DIR]`: every experiment over the load x pressure
+grid, into the rigid-ring tables, trend verdicts, a Magic Formula fit and an MF-Swift `.tir` (the work is
+`jtire.characterize` and `jtire.rigid_ring`). A killed run resumes from DIR; other settings refuse."""
+
+from pathlib import Path
+
+
+def add_arguments(p):
+    p.add_argument("config", nargs="?", default=None,
+                   help="characterization TOML (default: the shipped configs/characterize.toml, the study's grid)")
+    p.add_argument("--tire", default=None, help="tire TOML to characterize (default: the config's tire_file), e.g. "
+                                                "a calibrated tire from `jtire calibrate`")
+    p.add_argument("--out", default="runs/characterize", help="output folder (resumes a run with the same settings)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a field, e.g. grid.pressures_psi=[120] or tire.mesh.n_theta=48")
+    p.add_argument("--batch", type=int, default=0, help="cases per batch (default 0: an experiment's whole grid)")
+
+
+def run_cli(args, say) -> int:
+    import time
+
+    from tqdm import tqdm
+
+    from .. import characterize as ch
+    from ..errors import ConfigError, SimulationError
+    from ..resources import config_path
+    from ..rigid_ring.export import export
+    from ..rigid_ring.table import write_characterization
+
+    if args.batch < 0:
+        raise ConfigError(f"--batch {args.batch}: must be >= 0 (0: an experiment's whole grid in one batch)")
+    plan = ch.load_plan(args.config or config_path("characterize.toml"), args.tire, args.overrides)
+    out = Path(args.out)
+    total, done = ch.total_cases(plan, out if out.exists() else None)
+    if done:
+        say(f"resuming: {done} of {total} cases already done in {out}", err=True)
+    failures, walls = [], {}
+    bar = tqdm(total=total, initial=done, desc="characterize", unit="case")
+
+    def on_case(name, cond, err):
+        if err is not None:
+            failures.append(f"{name}: {err}")
+
+    t0 = time.perf_counter()
+    results = ch.run(plan, out, batch_size=args.batch, progress=bar.update, on_case=on_case)
+    bar.close()
+    walls["total_s"] = time.perf_counter() - t0
+    char = ch.characterization(plan, out, results)
+    write_characterization(out, char)
+    written, lines = export(char, out, tir_name="tire.tir", source=str(plan.path.name))
+    for line in lines:
+        say(line)
+    say(f"wrote {out / 'characterization.json'}, {', '.join(p.name for p in written)} in {out} "
+        f"({walls['total_s']:.0f} s)")
+    if failures:
+        raise SimulationError(f"{len(failures)} cases failed (rerun to retry them): " + "; ".join(failures))
+    return 0

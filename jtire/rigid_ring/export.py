@@ -1,0 +1,38 @@
+"""From a characterization to the files a vehicle-dynamics engineer uses: the two rigid-ring tables,
+the trend verdicts, the Magic Formula fit and an MF 6.1/6.2 `.tir` (shared by `jtire export-tir` and
+`jtire characterize`). Returns the written paths and the report lines; never prints."""
+
+from pathlib import Path
+
+from ..io import atomic_write_text
+from . import magic_formula as mf
+from . import report, tir, trends
+
+
+def export(char, out_dir, tir_name: str = "rigid_ring.tir", longvl: float = 6.7056, fittyp: int = 61,
+           all_pressures: bool = False, source: str = "characterization"):
+    """Write the .tir, in_plane/out_of_plane tables and trends.md into out_dir. Returns (paths, lines)."""
+    out_dir = Path(out_dir)
+    out = out_dir / tir_name
+    rated = char.rated_row()
+    nom = mf.Nominal(rated.load_N, rated.pressure_Pa, char.tire.unloaded_radius_m)
+    curves = mf.curves_from_characterization(char, None if all_pressures else [rated.pressure_Pa])
+    fit = mf.fit_pure_lateral(curves, nom) if curves else None
+    sections, notes = tir.build(char, fit=fit, longvl=longvl, fittyp=fittyp, rated=rated)
+    written = [tir.write(out, sections, [f"rigid ring + MF {fittyp} from {source} (jtire)"])]
+    written += report.write_tables(char, out_dir)
+    vs = trends.verdicts(char)
+    written.append(atomic_write_text(out_dir / "trends.md", trends.markdown(vs)))
+    lines = [report.markdown(char, "in"), report.markdown(char, "out"), "### Trends\n", trends.markdown(vs)]
+    if fit is not None:
+        lines.append(f"MF fit ({'all pressures' if all_pressures else 'nominal pressure'}): "
+                     f"max |F_y,MF - F_y| over 0-{fit.err_range_deg:g} deg = {100 * fit.max_fy_error:.2f} % of peak"
+                     + ("" if fit.max_mz_error is None else f", M_z {100 * fit.max_mz_error:.2f} %")
+                     + ("" if fit.success else f" (optimizer: {fit.message})"))
+        for fz, p, efy, emz in fit.errors:
+            lines.append(f"  {fz:9.0f} N {p / 1e3:6.0f} kPa: F_y {100 * efy:.2f} %"
+                         + ("" if emz is None else f", M_z {100 * emz:.2f} %"))
+    else:
+        lines.append("MF fit: no E10 curves in the characterization (not fitted)")
+    lines += [f"note: {n}" for n in notes]
+    return [Path(p) for p in written if p is not None], lines
