@@ -110,6 +110,7 @@ def observe(model, params, drive, t, y):
         strain_energy=d["strain_energy"],
         belt_disp=belt[0],
         belt_rot=belt[1],
+        drum=y.drum,
     )
 
 

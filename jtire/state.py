@@ -32,13 +32,14 @@ class TireState(eqx.Module):
     settle_work: Float[Array, ""]
     friction_work: Float[Array, ""]
     aq: Float[Array, " 6"]
+    drum: Float[Array, " 2"]  # (angle rad, spin rad/s) of a free drum (E06); zero without one
 
     @staticmethod
     def at_rest(model, n_branches: int):
         z = jnp.zeros(())
         zp = jnp.zeros(model.n_points)
         return TireState(model.x_ref, model.x_ref.map(jnp.zeros_like), jnp.zeros(6), jnp.zeros(6),
-                         jnp.zeros((n_branches, model.s0.shape[0])), V(zp, zp, zp), z, z, z, jnp.zeros(6))
+                         jnp.zeros((n_branches, model.s0.shape[0])), V(zp, zp, zp), z, z, z, jnp.zeros(6), jnp.zeros(2))
 
     def advance(self, upd: "Update", h, drive: "Drive"):
         free = drive.rim_free
@@ -46,7 +47,12 @@ class TireState(eqx.Module):
         v = self.v + upd.ax * h
         return TireState(self.x + v * h, v, self.q + h * qd, qd, upd.maxwell, upd.bristle,
                          self.dissipated + h * upd.power_rubber, self.settle_work + h * upd.power_settle,
-                         self.friction_work + h * upd.power_friction, jnp.where(free, upd.aq, 0.0))
+                         self.friction_work + h * upd.power_friction, jnp.where(free, upd.aq, 0.0),
+                         self._drum(upd, h))
+
+    def _drum(self, upd, h):
+        w = self.drum[1] + h * upd.drum_acc
+        return jnp.stack([self.drum[0] + h * w, w])
 
 
 class Update(eqx.Module):
@@ -59,6 +65,7 @@ class Update(eqx.Module):
     power_rubber: Array
     power_settle: Array
     power_friction: Array
+    drum_acc: Array = 0.0  # rad/s^2 of a free drum (0 without one)
 
 
 class Drive(eqx.Module):

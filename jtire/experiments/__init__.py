@@ -10,9 +10,10 @@ from .lateral import LateralStiffness
 from .phases import Case, Protocol
 from .rolling import RollingResistance
 from .sidewall import InplaneRotation, SidewallCamber, SidewallTranslation
+from .traction import Traction
 from .vertical import VerticalStiffness
 
-REGISTRY = {cls.name: cls for cls in (Footprint, VerticalStiffness, DrumCleat, DropTest, InplaneRotation,
+REGISTRY = {cls.name: cls for cls in (Footprint, VerticalStiffness, DrumCleat, DropTest, InplaneRotation, Traction,
                                       SidewallTranslation, SidewallCamber, LateralStiffness, Cornering,
                                       RelaxationLength, RollingResistance)}
 

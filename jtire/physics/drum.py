@@ -58,6 +58,35 @@ class Drum(AbstractSurface):
         return gap, n, _rigid_velocity(self.omega, self.centre_x, self.centre_z, Q)
 
 
+class FreeDrum(AbstractSurface):
+    """A rigid drum that spins with its own inertia (E06): radius, axle at (centre_x, centre_z) (m),
+    `inertia` (kg m^2) about its axle, `omega` (rad/s about +y) its current spin. The drum's spin is a
+    state variable (`TireState.drum` = (angle, omega)): the vector field sets `omega` from the state
+    before querying (`spinning`) and, where `free` = 1, turns the contact forces' moment about the
+    drum's axle into its angular acceleration (`free` = 0: the spin is held)."""
+
+    radius: Float[Array, ""]
+    centre_x: Float[Array, ""]
+    centre_z: Float[Array, ""]
+    inertia: Float[Array, ""]
+    free: Float[Array, ""]
+    omega: Float[Array, ""] = None
+
+    def spinning(self, omega):
+        return FreeDrum(self.radius, self.centre_x, self.centre_z, self.inertia, self.free, omega)
+
+    def query(self, P, t):
+        gap, n, Q = _cylinder(P, self.centre_x, self.centre_z, self.radius)
+        return gap, n, _rigid_velocity(self.omega, self.centre_x, self.centre_z, Q)
+
+    def acceleration(self, P, F):
+        """Angular acceleration (rad/s^2) of the drum under the reaction -F of the contact forces F (V,
+        on the tire's points P): torque about +y of -F, (r x f)_y = r_z f_x - r_x f_z, over the inertia."""
+        rx, rz = P.x - self.centre_x, P.z - self.centre_z
+        torque = -jnp.sum(rz * F.x - rx * F.z)
+        return self.free * torque / self.inertia
+
+
 class Cleat(AbstractSurface):
     """Rounded cleat: a y-parallel cylinder of `radius` (m) fixed to a drum (radius drum_radius,
     centre (centre_x, centre_z), turning at omega) and standing `height` (m) above its surface.

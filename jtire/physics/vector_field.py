@@ -15,6 +15,7 @@ from . import rim
 from .geometry_ops import V, cross, dot
 from .rigid_belt import belt_load_forces, rigid_belt_accelerations
 from .contact import OMEGA_REF, contact_forces
+from .drum import FreeDrum
 
 
 def evaluate(model, params, drive, t, y):
@@ -49,8 +50,13 @@ def evaluate(model, params, drive, t, y):
     p = drive.pressure(t)
     k_n, k_t, _ = model.contact_stiffness(params)
     c_n = params.tread_loss * k_n / OMEGA_REF
-    F, bristle, F_n, gap, p_tread, p_slide = contact_forces(drive.surface, P, Pdot, t, y.bristle, k_n, k_t,
+    surface = drive.surface
+    free_drum = isinstance(surface, FreeDrum)
+    if free_drum:  # a drum with its own inertia: its spin is the state's
+        surface = surface.spinning(y.drum[1])
+    F, bristle, F_n, gap, p_tread, p_slide = contact_forces(surface, P, Pdot, t, y.bristle, k_n, k_t,
                                                             c_n, params.friction, drive.dt)
+    drum_acc = surface.acceleration(P, F) if free_drum else jnp.zeros(())
     ((fx, fq),) = jax.linear_transpose(lin, Y)((-sigma, p, F))
 
     # dynamic-relaxation damping on velocities relative to the rim frame (alpha = 1: the rim
@@ -78,7 +84,7 @@ def evaluate(model, params, drive, t, y):
         ax = fx / m + V(g[0], g[1], g[2])
     aq = (fq + drive.rim_force(t) + g6) / M_rim
 
-    upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle, p_slide)
+    upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle, p_slide, drum_acc)
     d = s - model.s0
     # fq: generalized force (N, N m about the rim centre) of the tire on the rim: beads, the
     # pressure on the rim closure and the reaction of rim-frame damping. It is what a hub
