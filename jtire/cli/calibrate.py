@@ -13,8 +13,8 @@ def add_arguments(parser):
                         help="calibration TOML, e.g. configs/calibration/study.toml")
     parser.add_argument("--out", default=None,
                         help="output folder (default runs/calibrate/<config name>); resumes from it")
-    parser.add_argument("--method", choices=("arsm", "lm"), default=None,
-                        help="arsm (response surfaces, batches) or lm (Levenberg-Marquardt with "
+    parser.add_argument("--method", choices=("arsm", "gradient", "lm"), default=None,
+                        help="arsm (response surfaces, batches) or gradient (= lm: Levenberg-Marquardt with "
                         "the simulator's Jacobian); default: the config's")
     parser.add_argument("--budget", type=float, default=None,
                         help="ARSM evaluations or LM forward-run equivalents (default: the config's)")
@@ -61,7 +61,8 @@ def run_cli(args, say) -> int:
         say(f"  {res.n_evaluations} evaluations, best total error {res.total_error_pct:.4g} %",
             err=True)
 
-    res, paths = run_calibration(spec, sim, out, args.method, args.budget, progress)
+    method = "lm" if args.method == "gradient" else args.method
+    res, paths = run_calibration(spec, sim, out, method, args.budget, progress)
     from ..calibration.report import format_markdown, table_4_4
 
     say(format_markdown(table_4_4(res, spec)).rstrip())

@@ -14,6 +14,9 @@ def add_arguments(p):
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a field, e.g. grid.pressures_psi=[120] or tire.mesh.n_theta=48")
     p.add_argument("--batch", type=int, default=0, help="cases per batch (default 0: an experiment's whole grid)")
+    p.add_argument("--no-validate", action="store_true",
+                   help="skip the rigid-ring validation against the shell model (drop, drum-cleat, lateral release, "
+                        "slip step at three grid conditions)")
 
 
 def run_cli(args, say) -> int:
@@ -50,8 +53,31 @@ def run_cli(args, say) -> int:
     written, lines = export(char, out, tir_name="tire.tir", source=str(plan.path.name))
     for line in lines:
         say(line)
+    if not args.no_validate:
+        written += _validate(plan, out, say)
     say(f"wrote {out / 'characterization.json'}, {', '.join(p.name for p in written)} in {out} "
         f"({walls['total_s']:.0f} s)")
     if failures:
         raise SimulationError(f"{len(failures)} cases failed (rerun to retry them): " + "; ".join(failures))
     return 0
+
+
+def _validate(plan, out, say) -> list:
+    """The rigid ring against the shell model at three grid conditions: table and figure."""
+    from .. import units as U
+    from ..io import atomic_write_text
+    from ..rigid_ring import validation
+    from ..validate import DEFAULT_CONDITIONS, validate
+
+    grid = {(round(c["load_N"] / U.G0, 6), round(c["pressure_Pa"] / U.PSI, 6)) for c in plan.conditions}
+    conds = [c for c in DEFAULT_CONDITIONS if c in grid] or [sorted(grid)[0]]
+    res = validate(out, plan, conds)
+    text, written = ["## Rigid ring vs shell model\n"], []
+    for c, rows, s_sig, r_sig in res:
+        kg, psi = c["load_N"] / U.G0, c["pressure_Pa"] / U.PSI
+        text += [f"### {kg:g} kg, {psi:g} psi\n", validation.markdown(rows)]
+        written.append(validation.validation_figure(s_sig, r_sig, out / f"validation_{kg:g}kg_{psi:g}psi.png",
+                                                    title=f"Rigid ring vs shell model, {kg:g} kg, {psi:g} psi"))
+    written.append(atomic_write_text(out / "validation.md", "\n".join(text)))
+    say("\n".join(text))
+    return [p for p in written if p is not None]

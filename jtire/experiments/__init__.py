@@ -9,12 +9,13 @@ from .footprint import Footprint
 from .lateral import LateralStiffness
 from .phases import Case, Protocol
 from .rolling import RollingResistance
+from .slip_step import SlipStep
 from .sidewall import InplaneRotation, SidewallCamber, SidewallTranslation
 from .traction import Traction
 from .vertical import VerticalStiffness
 
 REGISTRY = {cls.name: cls for cls in (Footprint, VerticalStiffness, DrumCleat, DropTest, InplaneRotation, Traction,
                                       SidewallTranslation, SidewallCamber, LateralStiffness, Cornering,
-                                      RelaxationLength, RollingResistance)}
+                                      RelaxationLength, RollingResistance, SlipStep)}
 
 __all__ = ["REGISTRY", "Experiment", "Case", "Protocol"]

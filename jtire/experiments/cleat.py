@@ -217,6 +217,6 @@ class DrumCleat(Experiment):
             "t_cleat_touch_s": t_touch, "t_cleat_leave_s": t_leave, "spectrum_from_s": t_leave,
             "sample_rate_Hz": self.sample_rate, "f_band_Hz": list(band),
             "spectrum": sp.as_dict(), "spectrum_contact_force": sp_c.as_dict()}
-        sig = {"time_s": ts - t_touch, "axle_force_N": f_axle, "contact_force_z_N": fc, "belt_disp_z_m": bz,
-               "spin_rad_s": spin}
+        sig = {"time_s": ts - t_touch, "axle_force_N": f_axle, "axle_force_x_N": s["tire_on_rim"][:, 0],
+               "contact_force_z_N": fc, "belt_disp_z_m": bz, "spin_rad_s": spin}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)

@@ -67,7 +67,7 @@ def stage_names(ramp_s: float, release_s: float) -> list:
 
 
 def rolling_plan(model, params, case, proto, *, outer_radius, speed, slip_angle, settle_s, ramp_s, release_s,
-                 measure_s, damping, n_save):
+                 measure_s, damping, n_save, final=()):
     """The whole rolling sequence for one case. ramp_s, release_s are static (they fix the number of
     stages); the others may be traced. Returns (PhaseOut stacked: inflate, load, stages..., end
     state, mem)."""
@@ -92,4 +92,5 @@ def rolling_plan(model, params, case, proto, *, outer_radius, speed, slip_angle,
     if release_s > 0:
         extra.append(stage(0.0, release_s))
     extra.append(measure)
+    extra += list(final)
     return loaded_plan(model, params, case, proto, case.load, n_save, extra=extra)

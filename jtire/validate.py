@@ -1,0 +1,126 @@
+"""The populated rigid ring against the shell model under the same inputs (docs/rigid-ring.md §8), at
+three grid conditions of a finished characterization.
+
+Shell side: the drop test (E04), the drum-cleat (E03) and the lateral release (E09 with its decay)
+are read from the characterization's own case folders; the slip-angle step at 5 and 15 m/s is run here
+(`experiments.slip_step`, one batch for every condition and speed). Ring side: `rigid_ring.params.derive`
+populates the ring from the same condition's table row and `rigid_ring.scenarios` runs the same inputs.
+`rigid_ring.validation.compare` judges every metric against its tolerance (stated up front there).
+"""
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+
+from . import spectra
+from . import units as U
+
+DEFAULT_CONDITIONS = ((4625.0, 120.0), (2312.5, 120.0), (4625.0, 70.0))  # (kg, psi): rated, light, soft
+
+
+def _case_dir(char_dir, experiment, load_N, pressure_Pa):
+    """The case folder of an experiment at a condition in a characterization folder (or None)."""
+    for d in sorted((Path(char_dir) / experiment / "cases").glob("*")):
+        f = d / "result.json"
+        if not f.exists():
+            continue
+        c = json.loads(f.read_text())["condition"]
+        if abs(c["pressure_Pa"] - pressure_Pa) < 1e-3 and ("load_N" not in c or abs(c["load_N"] - load_N) < 1e-6):
+            return d
+    return None
+
+
+def _signals(folder):
+    rows = list(csv.DictReader((Path(folder) / "signals.csv").open()))
+    return {k: np.array([float(r[k]) if r[k] not in ("", "None") else np.nan for r in rows]) for k in rows[0]}
+
+
+def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
+    """(metrics, figure signals) of the shell model at one condition from the characterization folder."""
+    m, sig = {}, {}
+    d = _case_dir(char_dir, "drop_test", load_N, pressure_Pa)
+    if d is not None:
+        q = json.loads((d / "result.json").read_text())["quantities"]
+        s = _signals(d)
+        t, fz = s["time_s"], s["contact_force_z_N"]
+        belt = spectra.first_mode(t, fz, f_band=(40.0, 300.0), t_start=float(t[np.argmax(fz > 0)]), fit=False)
+        m |= {"drop.static_deflection_m": q["static_deflection_m"], "drop.bounce_f_Hz": q["f_d_fit_Hz"],
+              "drop.bounce_zeta": q["xi_fit"], "drop.peak_F_z_N": float(np.nanmax(fz)),
+              "drop.belt_mode_Hz": belt.f_peak_Hz}
+        sig["drop"] = (t, s["rim_z_m"] - s["rim_z_m"][0])
+    d = _case_dir(char_dir, "drum_cleat", load_N, pressure_Pa)
+    if d is not None:
+        q = json.loads((d / "result.json").read_text())["quantities"]
+        info = json.loads((d / "result.json").read_text())["info"]
+        s = _signals(d)
+        t = s["time_s"]
+        after = float(info["t_cleat_leave_s"] - info["t_cleat_touch_s"])
+        m |= {"drum.vertical_mode_Hz": q["first_mode_fit_fn_Hz"], "drum.vertical_mode_zeta": q["first_mode_xi"]}
+        if "axle_force_x_N" in s:
+            fa = spectra.first_mode(t, s["axle_force_x_N"], f_band=tuple(info["f_band_Hz"]), t_start=after)
+            m |= {"drum.fore_aft_mode_Hz": fa.fn_fit_Hz, "drum.fore_aft_mode_zeta": fa.xi_fit,
+                  "drum.F_x_peak_to_peak_N": float(np.ptp(s["axle_force_x_N"][t >= 0]))}
+        m["drum.F_z_peak_to_peak_N"] = float(np.ptp(s["axle_force_N"][t >= 0]))
+        sig["drum"] = (t, s["axle_force_N"])
+    d = _case_dir(char_dir, "lateral_stiffness", load_N, pressure_Pa)
+    if d is not None:
+        q = json.loads((d / "result.json").read_text())["quantities"]
+        if "f_d_fit_Hz" in q:
+            s = _signals(d)
+            m |= {"lateral.f_Hz": q["f_d_fit_Hz"], "lateral.zeta": q["xi_fit"]}
+            sig["lateral"] = (s["time_s"], s["rim_y_m"])
+    return m, sig
+
+
+def step_metrics(result, speeds=(5.0, 15.0)) -> tuple:
+    m, sig = {}, {}
+    q, s = result.quantities, result.signals
+    for v in speeds:
+        k = f"{v:g}"
+        m |= {f"step_{k}.F_y_steady_N": q[f"F_y_steady_SAE_N_{k}"], f"step_{k}.M_z_steady_Nm": q[f"M_z_steady_SAE_Nm_{k}"],
+              f"step_{k}.s63_m": q[f"s63_m_{k}"]}
+        sig[f"step_{k}"] = (s[f"distance_m_{k}"], s[f"F_y_SAE_N_{k}"])
+    return m, sig
+
+
+def ring_results(row, tire_info) -> dict:
+    from .rigid_ring import scenarios as sc
+    from .rigid_ring.params import derive
+
+    d = derive(row, tire_info)
+    out = {"drop": sc.drop_test(d), "drum": sc.drum_cleat(d), "lateral": sc.lateral_release(d)}
+    for v in (5.0, 15.0):
+        out[f"step_{v:g}"] = sc.slip_step(d, speed=v)
+    return out
+
+
+def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None):
+    """Compare ring and shell at `conditions` ((kg, psi) pairs of the grid). Returns a list of
+    (condition dict, comparison rows, shell signals, ring signals)."""
+    from . import batch
+    from .config import validate_table
+    from .experiments import REGISTRY
+    from .experiments.phases import Protocol
+    from .rigid_ring import validation
+    from .rigid_ring.table import read_characterization
+    from .tire import make_tire
+
+    char = read_characterization(char_dir)
+    conds = [{"load_N": kg * U.G0, "pressure_Pa": psi * U.PSI} for kg, psi in conditions]
+    exp = REGISTRY["slip_step"].from_table(validate_table(slip_step_table or {}, REGISTRY["slip_step"].schema,
+                                                          "slip_step"), Protocol.from_dict(plan.solver), plan.tire)
+    steps = batch.run(exp, make_tire(plan.tire), conds)
+    out = []
+    for c, st in zip(conds, steps):
+        row = char.row(c["load_N"], c["pressure_Pa"])
+        shell, s_sig = shell_metrics(char_dir, c["load_N"], c["pressure_Pa"])
+        if not isinstance(st, batch.CaseFailure):
+            m, sg = step_metrics(st)
+            shell |= m
+            s_sig |= sg
+        rr = ring_results(row, char.tire) if row is not None else {}
+        rows = validation.compare(shell, validation.ring_metrics(rr))
+        out.append((c, rows, s_sig, validation.ring_signals(rr)))
+    return out
