@@ -1,16 +1,54 @@
-"""Shared fixtures. Tests run on the CPU in float64 (importing jtire enables it)."""
+"""Shared fixtures. Tests run on the CPU in float64 (importing jtire enables it).
+
+Compile cost shapes this file. Every distinct phase program (phase structure x batch shape x device
+count) costs 40-140 s to compile on the coarse mesh on this 2-core machine, so the suite compiles as
+few as it can and runs every simulation through the `runs` factory, which caches results for the
+whole session (test files share them). The fast suite uses:
+    one tire (`coarse_tire`: 32 segments, 4 crown elements) and ONE solver protocol (`protocol`);
+    flat-road program, 1 case on 1 device   ("singles": E01, E02, E04, E09, E12, custom plans, CLI runs);
+    flat-road program, 4 cases on 2 devices ("grids": the E01 grid, the E10 sweep, `jtire sweep`);
+    flat-road program, 4 cases on 1 device  (the unsharded E01 grid: sharded = unsharded);
+    rigid-belt program, 1 case on 1 device  (E05, E07, E08).
+Anything else (the default mesh, the drum of E03) is under @pytest.mark.slow.
+
+Persistent compilation cache: ON, in the default folder (`jtire.cache`: $JTIRE_CACHE_DIR if set, else
+the user's cache folder; JTIRE_CACHE_DIR=off turns it off). The command-line tests and the
+subprocesses (`jtire sweep` killed and resumed, the wheel install) enable it anyway (the CLI's
+default), so sharing it lets them load the programs this process compiled instead of compiling them
+again; a cold run (CI) writes it, a rerun only traces. Set JTIRE_CACHE_DIR to a fresh folder to time a
+cold suite.
+"""
 
 import dataclasses
+import json
 import os
 from pathlib import Path
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-import jtire  # noqa: E402,F401  (float64)
+import jtire  # noqa: E402,F401  (float64, one CPU device per core)
 import pytest  # noqa: E402
+
+from jtire import cache  # noqa: E402
+from jtire import units as U  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 TIRE_TOML = REPO / "configs" / "tires" / "xone_xda.toml"
+
+cache.enable()
+
+# The coarse tire and the one protocol as command-line overrides (for CLI and subprocess tests), so
+# that they run the very programs the in-process tests compiled.
+COARSE_SET = ["tire.mesh.n_theta=32", "tire.mesh.n_crown=4"]
+PROTOCOL = dict(settle_damping=300.0, ke_tol=1e-3, inflate_ramp=0.04, inflate_max=0.4, load_ramp=0.05, settle_max=0.3)
+SOLVER_SET = ["solver.settle_damping_per_s=300.0", "solver.ke_tol_J=0.001", "solver.inflate_ramp_s=0.04",
+              "solver.inflate_max_s=0.4", "solver.load_ramp_s=0.05", "solver.settle_max_s=0.3"]
+
+# The standard conditions: rated, and the E01 grid (light, rated, high and low pressure).
+P_RATED, LOAD_RATED = 120 * U.PSI, 4625 * U.G0
+RATED = {"pressure_Pa": P_RATED, "load_N": LOAD_RATED}
+GRID = [{"pressure_Pa": P_RATED, "load_N": 2312.5 * U.G0}, RATED,
+        {"pressure_Pa": 150 * U.PSI, "load_N": LOAD_RATED}, {"pressure_Pa": 70 * U.PSI, "load_N": LOAD_RATED}]
 
 
 @pytest.fixture(scope="session")
@@ -31,18 +69,141 @@ def coarse_tire(spec):
 
 @pytest.fixture(scope="session")
 def protocol():
+    """The one solver protocol of the suite. A 50 ms load ramp and a 0.3 s settle limit: the coarse
+    ring's belt modes are > 25 Hz and near-critically damped while settling (300 1/s), so a 50 ms ramp
+    is still quasi-static; every settled phase is also checked for force balance by the runs."""
     from jtire.experiments.phases import Protocol
 
-    return Protocol.from_dict(dict(settle_damping=300.0, ke_tol=1e-3, inflate_ramp=0.04, inflate_max=0.4,
-                                   load_ramp=0.1, settle_max=0.5))
+    return Protocol.from_dict(PROTOCOL)
+
+
+def make_experiment(name, protocol, spec, **table):
+    """An experiment built from its config table (file units), validated like a config file."""
+    from jtire.config import validate_table
+    from jtire.experiments import REGISTRY
+
+    cls = REGISTRY[name]
+    return cls.from_table(validate_table(table, cls.schema, name), protocol, spec)
+
+
+@dataclasses.dataclass
+class Run:
+    """One cached batch run: the experiment, its results (ExperimentResult with .outputs, or
+    CaseFailure), the phase-program traces it added (and how many there were before it), the
+    devices it ran on and its place in the session's runs."""
+
+    exp: object
+    results: list
+    traces_added: int
+    traces_before: int
+    devices: int  # devices the batch ran on
+    order: int  # runs made before this one in the session
+
+
+class Runs:
+    """runs(name, conditions, devices=1, tire=None, **table) -> Run, cached for the session."""
+
+    def __init__(self, spec, tire, protocol):
+        self.spec, self.tire, self.protocol = spec, tire, protocol
+        self.cache = {}
+
+    def __call__(self, name, conditions, devices=1, tire=None, **table):
+        from jtire import batch
+
+        tire = self.tire if tire is None else tire
+        key = (name, json.dumps(table, sort_keys=True), json.dumps(conditions, sort_keys=True), devices, id(tire))
+        if key not in self.cache:
+            exp = make_experiment(name, self.protocol, self.spec, **table)
+            before = batch.program_traces()
+            res = batch.run(exp, tire, [dict(c) for c in conditions], devices=devices, keep_outputs=True)
+            n_cases = sum(len(exp.cases(c)) for c in conditions)
+            self.cache[key] = Run(exp, res, batch.program_traces() - before, before,
+                                  batch.n_devices_for(n_cases, devices), len(self.cache))
+        return self.cache[key]
 
 
 @pytest.fixture(scope="session")
-def short_protocol():
-    """A shorter load ramp and settle than `protocol`, for the dynamic-experiment tests on the
-    coarse ring: its belt modes are > 25 Hz and near-critically damped while settling, so a
-    50 ms ramp is still quasi-static."""
-    from jtire.experiments.phases import Protocol
+def runs(spec, coarse_tire, protocol):
+    return Runs(spec, coarse_tire, protocol)
 
-    return Protocol.from_dict(dict(settle_damping=300.0, ke_tol=1e-3, inflate_ramp=0.04, inflate_max=0.4,
-                                   load_ramp=0.05, settle_max=0.3))
+
+def ok(result):
+    """The ExperimentResult, or fail the test with the simulation's own message."""
+    from jtire.batch import CaseFailure
+
+    if isinstance(result, CaseFailure):
+        pytest.fail(f"{result.condition}: {result.error}")
+    return result
+
+
+# ---- the shared runs (each simulated once per session) ---------------------------------------------
+@pytest.fixture(scope="session")
+def e01_grid(runs):
+    """E01 over GRID, 4 cases on 2 devices. Requested before every other flat-road run of the
+    suite (the fixtures below depend on it), so its trace count is that of a fresh process."""
+    return runs("footprint", GRID, devices=2)
+
+
+@pytest.fixture(scope="session")
+def e01_grid_unsharded(runs, e01_grid):
+    return runs("footprint", GRID, devices=1)
+
+
+@pytest.fixture(scope="session")
+def e01_singles(runs, e01_grid):
+    return [runs("footprint", [c]) for c in GRID]
+
+
+E02_TABLE = dict(ramp_s=0.15)  # 0.15 s: 2 % quasi-static on the coarse ring (its modes are faster than the default's)
+
+
+@pytest.fixture(scope="session")
+def e02(runs, e01_grid):
+    return runs("vertical_stiffness", [RATED], **E02_TABLE)
+
+
+@pytest.fixture(scope="session")
+def e09(runs, e01_grid):
+    """E09 with its release decay (0.15 s: ~5 periods of the ~30 Hz lateral mode)."""
+    return runs("lateral_stiffness", [RATED], decay_s=0.15)
+
+
+@pytest.fixture(scope="session")
+def e04(runs, e01_grid):
+    return runs("drop_test", [RATED], duration_s=0.25)
+
+
+E12_LOAD = 41.4e3  # N: the second calibration load (target 1701.11 N)
+
+
+@pytest.fixture(scope="session")
+def e12(runs, e01_grid):
+    """E12 with its default stages at the calibration load 41.4 kN (coarse ring)."""
+    return runs("rolling_resistance", [{"pressure_Pa": P_RATED, "load_N": E12_LOAD}])
+
+
+# E10 on 4 slip angles (4 cases: the grid program): +-2 deg for antisymmetry, 0, 1, 2 for k_f, k_m.
+E10_TABLE = dict(slip_angles_deg=[-2.0, 0.0, 1.0, 2.0], kf_range_deg=[0.0, 2.0], km_range_deg=[0.0, 2.0],
+                 settle_s=0.1, ramp_s=0.03, release_s=0.01, measure_s=0.02)
+
+
+@pytest.fixture(scope="session")
+def e10(runs, e01_grid):
+    return runs("cornering", [RATED], devices=2, **E10_TABLE)
+
+
+SIDEWALL = ("inplane_rotation", "sidewall_translation", "sidewall_camber")
+SIDEWALL_DECAY = {"decay_s": 0.1}  # ~3 periods of the 25-37 Hz belt modes: two peaks and the fit
+P_LOW = 80 * U.PSI
+
+
+@pytest.fixture(scope="session")
+def sidewall_runs(runs):
+    """{name: {pressure: Run}} at 120 and 80 psi (E05, E07, E08: per pressure, no load)."""
+    return {n: {p: runs(n, [{"pressure_Pa": p}], **SIDEWALL_DECAY) for p in (P_RATED, P_LOW)} for n in SIDEWALL}
+
+
+@pytest.fixture(scope="session")
+def undamped_tire(coarse_tire):
+    """The coarse tire with every rubber loss zero (same leaves and dtypes: the same programs)."""
+    return dataclasses.replace(coarse_tire, params=coarse_tire.params.without_damping())

@@ -62,9 +62,19 @@ def test_bad_calibration_configs(tmp_path, capsys, edit, words):
                     "jtire calibrate: error:", *words)
 
 
-def test_shell_simulator_missing_is_one_line(tmp_path, capsys):
-    _one_line_error(capsys, ["calibrate", str(CAL / "study.toml"), "--out", str(tmp_path / "o")],
-                    "shell simulator: wired by the batched runner")
+def test_shell_simulator_is_the_default(capsys):
+    """Without --standin the calibration runs the shell model (calibration/shell.py): built here, not run
+    (one evaluation of the study's targets on the default mesh takes minutes)."""
+    from jtire.calibration.shell import ShellSimulator
+    from jtire.calibration.spec import load_calibration
+    from jtire.cli.calibrate import simulator_for
+
+    spec = load_calibration(CAL / "study.toml", [])
+    sim = simulator_for(spec, False, lambda *a, **k: None)
+    assert isinstance(sim, ShellSimulator)
+    assert [g["exp"].name for g in sim.groups] == ["vertical_stiffness", "lateral_stiffness", "rolling_resistance"]
+    assert [len(g["targets"]) for g in sim.groups] == [1, 1, 2]  # both E12 targets share one batch
+    assert sim.fingerprint()["mesh"]["n_theta"] == spec.tire.n_theta
 
 
 def test_calibrate_and_sensitivity_on_the_standin(tmp_path, capsys):

@@ -32,9 +32,7 @@ def test_zero_internal_force_at_rest_and_under_rigid_motion(coarse_tire):
     from jtire.state import TireState
 
     m, p = coarse_tire.model, coarse_tire.params
-    proto_free = phases.Protocol.from_dict(dict(settle_damping=0.0, ke_tol=1e-3, inflate_ramp=0.01, inflate_max=0.1,
-                                                load_ramp=0.1, settle_max=0.1))
-    drive = phases.make_drive(0.0, 1e-5, proto_free, surface=phases.far_road())
+    drive = phases.make_drive(0.0, 1e-5, surface=phases.flat_road(-phases.FAR))
     y = TireState.at_rest(m, 3)
     q = jnp.array([0.01, 0.02, -0.01, 0.0, 1.3, 0.0])
     y = eqx.tree_at(lambda s: (s.x, s.q), y, (_rigid(m, m.x_ref, q), q))
@@ -90,8 +88,6 @@ def test_tire_on_rim_balances_node_forces_and_contact(coarse_tire):
     from jtire.state import TireState
 
     m, p = coarse_tire.model, coarse_tire.params
-    proto = phases.Protocol.from_dict(dict(settle_damping=0.0, ke_tol=1e-3, inflate_ramp=0.0, inflate_max=0.1,
-                                           load_ramp=0.1, settle_max=0.1))
     rng = np.random.default_rng(3)
     y = TireState.at_rest(m, len(p.relaxation_times))
     x = m.x_ref + V.of(jnp.asarray(rng.normal(scale=1e-3, size=(3,) + m.node_mass.shape)))
@@ -99,7 +95,7 @@ def test_tire_on_rim_balances_node_forces_and_contact(coarse_tire):
     q = jnp.array([0.0, 0.0, 0.0, 0.0, 0.3, 0.0])
     y = eqx.tree_at(lambda s: (s.x, s.v, s.q, s.qd), y, (x, v, q, jnp.array([0.0, 0, 0, 0, 2.0, 0])))
     z_low = float(phases.first_contact_height(m, y))
-    drive = phases.make_drive(8.0e5, 1e-5, proto, surface=phases.flat_road(z_low + 0.01))
+    drive = phases.make_drive(8.0e5, 1e-5, surface=phases.flat_road(z_low + 0.01))
     upd, d = evaluate(m, p, drive, 0.0, y)
     f_nodes = upd.ax * m.node_mass  # gravity is zero in this drive
     fq, F, P = d["tire_on_rim"], d["F"], d["P"]

@@ -38,13 +38,21 @@ def inflated_torus(spec):
                        "E_meridional": jnp.full(6, ET / t), "E_circumferential": jnp.full(6, ET / t),
                        "G_shear": jnp.full(6, 0.3 * ET / t), "E_bending": jnp.full(6, 1e4),
                        "thickness": jnp.full(6, t), "loss": jnp.zeros(6), "undertread_E": jnp.asarray(0.0)})
+    import jax.numpy as jnp
+
     from jtire import solve
     from jtire.experiments import phases
+    from jtire.state import TireState
 
-    proto = phases.Protocol.from_dict(dict(settle_damping=400.0, ke_tol=1e-7, inflate_ramp=0.02, inflate_max=0.4,
-                                           load_ramp=0.1, settle_max=0.1))
+    # inflate: the pressure ramped 0 -> P over 20 ms with the rim held, settled to 1e-7 J (its own
+    # program: another model than every experiment's)
     dt = solve.stable_step(model, p, P, 400.0)
-    res = phases.inflate(model, p, P, dt, proto, solve.MAX_STEPS)
+    drive = phases.make_drive(P, dt, pressure0=0.0, t0=0.0, t1=0.02, surface=phases.flat_road(-phases.FAR),
+                              damping=400.0)
+    ts = jnp.linspace(0.0, 0.4, solve.N_SAVE)
+    y0 = TireState.at_rest(model, len(p.relaxation_times))
+    res = solve.run_phase_jit(model, p, drive, y0, jnp.float64(0.0), jnp.float64(0.4), ts, jnp.float64(0.02),
+                              jnp.float64(1e-7), solve.MAX_STEPS)
     solve.check_phase("torus inflation", res, model)
     return model, p, res.y
 

@@ -5,24 +5,20 @@ the material: the belt stays rigid, the load never enters, the release has no ar
 (and no damping at all once every loss is zero), the stiffnesses are positive, finite and rise
 with the inflation pressure, and the belt behaves as a single-DOF oscillator (its own mass times
 omega_n^2 is the static stiffness, up to the sidewalls' share of the motion).
-All runs share one compiled program (rigid belt, N_SAVE samples).
+All runs share one compiled program (rigid belt, one case on one device; conftest `sidewall_runs`).
 """
 
-import dataclasses
-
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jtire import units as U
-from jtire.experiments import sidewall
-from jtire.experiments.registry import REGISTRY
-from jtire.cli.run import load_run_config
+from jtire.config import load_run_config
+from jtire.experiments import REGISTRY
+from jtire.experiments.phases import Case
+from jtire.experiments.program import f64, last_valid, phase
 
-from .conftest import REPO
-from jtire.signals import free_decay
-
-P_HI, P_LO = 120 * U.PSI, 80 * U.PSI
-DECAY = 0.1  # s: ~3 periods of the 25-37 Hz belt modes, enough for two peaks and the fit
+from .conftest import P_LOW, P_RATED, REPO, SIDEWALL, SIDEWALL_DECAY, ok
 
 # Tolerances, each with its reason.
 # belt node distances after a slow, damped hold: the explicit rigid-body update drifts O((h w)^2)
@@ -32,130 +28,114 @@ TOL_XI_UNDAMPED_FIT = 1e-3  # symplectic Euler has no numerical dissipation (a d
 TOL_XI_UNDAMPED_2P = 2e-3  # two peaks also see the beating of the sidewall modes (measured ~1e-3)
 TOL_SDOF = 0.10  # k_own_mass*omega^2 vs static k: sidewall mass share and viscoelastic stiffening, a few % each
 TOL_CROSS = 1e-9  # m or rad: motion off the loaded axis vanishes by the tire's mirror symmetry
-
-
-class NoLoad(dict):
-    """A condition that raises if the load is read: the rigid-belt runs must not use it."""
-
-    def __getitem__(self, key):
-        if key == "load_N":
-            raise AssertionError("the rigid-belt experiment read the load")
-        return super().__getitem__(key)
-
-    def get(self, key, default=None):
-        return self[key] if key in self else default
+OWN_AXIS = {"inplane_rotation": 4, "sidewall_translation": 1, "sidewall_camber": 3}  # index in (disp, rot)
 
 
 @pytest.fixture(scope="module")
-def proto(short_protocol):
-    return short_protocol
+def undamped(runs, undamped_tire):
+    """E05 and E07 at 120 psi with every rubber loss zero (settled by the settle damping, then released
+    with no damping at all)."""
+    return {n: runs(n, [{"pressure_Pa": P_RATED}], tire=undamped_tire, **SIDEWALL_DECAY)
+            for n in ("inplane_rotation", "sidewall_translation")}
 
 
-@pytest.fixture(scope="module")
-def runs(coarse_tire, proto):
-    """Inflated states at two pressures, the three held states at each, undamped releases."""
-    out = {}
-    for p in (P_HI, P_LO):
-        dt, inf = sidewall.inflate_rigid(coarse_tire, p, proto)
-        r = sidewall.belt_radius(coarse_tire.model, inf.y)
-        out[p] = dict(dt=dt, inf=inf, r=r, held={})
-        for case, (_, build, *_rest) in sidewall.CASES.items():
-            f = {"inplane_rotation": 15e3, "sidewall_translation": 2e3, "sidewall_camber": 5e3}[case]
-            load6 = build(f, r)
-            out[p]["held"][case] = (load6, sidewall.hold(coarse_tire, p, proto, dt, inf, load6))
-    hi = out[P_HI]
-    undamped = dataclasses.replace(coarse_tire, params=coarse_tire.params.without_damping())
-    out["undamped"] = {}
-    for case in ("inplane_rotation", "sidewall_translation"):
-        load6, held = hi["held"][case]
-        out["undamped"][case] = sidewall.release(undamped, P_HI, proto, hi["dt"], held, load6, DECAY, 1e-3,
-                                                 params=undamped.params)
-    return out
+def pose(out, i):
+    """(6,) belt pose (displacement m, small rotation rad) at the last saved sample of phase i."""
+    ph = phase(out["phases"], i)
+    k = last_valid(ph.saved)
+    return np.concatenate([np.asarray(ph.saved["belt_disp"])[k], np.asarray(ph.saved["belt_rot"])[k]])
 
 
-def _stiffness(model, run, case):
-    load6, held = run["held"][case]
-    x = sidewall.coordinate(case, sidewall.belt_pose(model, held.y)) - \
-        sidewall.coordinate(case, sidewall.belt_pose(model, run["inf"].y))
-    return float(np.abs(load6).max()) / abs(x)
+def belt_rigidity_error(model, y) -> float:
+    """Largest change (m) of any distance between two belt nodes from the reference shape to state y
+    (the belt is rigid from the start, through the inflation too)."""
+    mask = np.asarray(model.belt_mask) > 0
+
+    def pts(x):
+        return np.stack([np.asarray(x.x)[mask], np.asarray(x.y)[mask], np.asarray(x.z)[mask]], -1)
+
+    a, b = pts(model.x_ref), pts(y.x)
+    da = np.linalg.norm(a[:, None] - a[None], axis=-1)
+    db = np.linalg.norm(b[:, None] - b[None], axis=-1)
+    return float(np.abs(da - db).max())
 
 
-def test_every_phase_settled(runs):
-    for p in (P_HI, P_LO):
-        assert bool(runs[p]["inf"].settled)
-        for case, (_, held) in runs[p]["held"].items():
-            assert bool(held.settled), (p, case)
-            assert not bool(held.blew_up)
+def test_every_phase_settled(sidewall_runs):
+    for name in SIDEWALL:
+        for p, run in sidewall_runs[name].items():
+            c = ok(run.results[0]).checks
+            assert c["inflate_settled"] and c["hold_settled"], (name, p)
+            assert not c["release_blew_up"], (name, p)
 
 
-def test_stiffness_positive_and_rises_with_pressure(coarse_tire, runs):
-    for case in sidewall.CASES:
-        k_hi = _stiffness(coarse_tire.model, runs[P_HI], case)
-        k_lo = _stiffness(coarse_tire.model, runs[P_LO], case)
-        assert np.isfinite(k_hi) and k_hi > 0, case
-        # inflation pressure pre-tensions the sidewall cords: every sidewall stiffness grows with it
-        assert k_hi > k_lo > 0, (case, k_lo, k_hi)
+@pytest.mark.parametrize("name", SIDEWALL)
+def test_stiffness_positive_and_rises_with_pressure(sidewall_runs, name):
+    exp = REGISTRY[name]
+    k_hi = ok(sidewall_runs[name][P_RATED].results[0]).quantities[exp.k_name]
+    k_lo = ok(sidewall_runs[name][P_LOW].results[0]).quantities[exp.k_name]
+    assert np.isfinite(k_hi) and k_hi > 0
+    # inflation pressure pre-tensions the sidewall cords: every sidewall stiffness grows with it
+    assert k_hi > k_lo > 0, (k_lo, k_hi)
 
 
-def test_load_moves_only_its_own_axis(coarse_tire, runs):
+@pytest.mark.parametrize("name", SIDEWALL)
+def test_load_moves_only_its_own_axis(sidewall_runs, name):
+    out = ok(sidewall_runs[name][P_RATED].results[0]).outputs[0]
+    motion = pose(out, 1) - pose(out, 0)  # held - inflated
+    own = OWN_AXIS[name]
+    assert abs(motion[own]) > 1e-4
+    motion[own] = 0.0
+    assert np.abs(motion).max() < TOL_CROSS, motion
+
+
+@pytest.mark.parametrize("name", SIDEWALL)
+def test_belt_stays_rigid(coarse_tire, sidewall_runs, undamped, name):
+    """Through inflation, hold and the free release. The hold leaves < TOL_RIGID_M; in a free
+    rotation the explicit rigid-body update changes distances by at most (h w)^2 * 2r per step, so the
+    release adds at most n_steps (h w_max)^2 2 r, w_max from the recorded rotation (measured ~4e-6 m vs
+    ~2e-5 m on E05; zero for the translation of E07)."""
     m = coarse_tire.model
-    run = runs[P_HI]
-    d0, r0 = sidewall.belt_pose(m, run["inf"].y)
-    own = {"inplane_rotation": 4, "sidewall_translation": 1, "sidewall_camber": 3}
-    for case, (_, held) in run["held"].items():
-        d, r = sidewall.belt_pose(m, held.y)
-        motion = np.concatenate([d - d0, r - r0])
-        assert abs(motion[own[case]]) > 1e-4, case
-        motion[own[case]] = 0.0
-        assert np.abs(motion).max() < TOL_CROSS, (case, motion)
-
-
-def test_belt_stays_rigid(coarse_tire, runs):
-    m = coarse_tire.model
-    run = runs[P_HI]
-    inf = run["inf"]
-    for case, (_, held) in run["held"].items():
-        assert sidewall.belt_rigidity_error(m, inf.y, held.y) < TOL_RIGID_M, case
-    # After a free rotation decay (where a rigid update could drift): the explicit rigid-body
-    # update changes distances by at most (h w)^2 * 2r per step, so the bound is
-    # n_steps (h w_max)^2 2 r, w_max from the recorded rotation (measured ~4e-6 m vs ~2e-5 m).
-    ts, dec = runs["undamped"]["inplane_rotation"]
-    rot = np.asarray(dec.saved["belt_rot"])[:, 1]
-    w_max = np.abs(np.diff(rot) / np.diff(ts)).max()
-    bound = int(dec.n_steps) * (run["dt"] * w_max) ** 2 * 2 * run["r"]
-    assert sidewall.belt_rigidity_error(m, inf.y, dec.y) < bound
-    assert bound < 5e-3 * np.ptp(rot) * run["r"]  # ... and the bound is far below the belt's own motion
+    for run in [sidewall_runs[name][P_RATED]] + ([undamped[name]] if name in undamped else []):
+        res = ok(run.results[0])
+        out = res.outputs[0]
+        rel = phase(out["phases"], 2)
+        ts = np.linspace(float(rel.t0), float(rel.t0) + SIDEWALL_DECAY["decay_s"], len(rel.saved["ke"]))
+        rot = np.asarray(rel.saved["belt_rot"])
+        w_max = np.abs(np.diff(rot, axis=0) / np.diff(ts)[:, None]).max()
+        r = float(out["r"])
+        bound = int(rel.n_steps) * (out["dt"] * w_max) ** 2 * 2 * r
+        err = belt_rigidity_error(m, out["y"])
+        assert err < TOL_RIGID_M + bound, (err, bound)
+        # ... and the bound is far below the belt's own motion in the release
+        x = np.concatenate([np.asarray(rel.saved["belt_disp"]), rot * r], axis=1)[:, OWN_AXIS[name]]
+        assert TOL_RIGID_M + bound < 5e-3 * np.ptp(x)
     # the sidewalls did deform (the test would pass trivially if nothing moved)
+    y = ok(sidewall_runs[name][P_RATED].results[0]).outputs[0]["y"]
     side = np.asarray(m.belt_mask) == 0
-    moved = np.abs(np.asarray(run["held"]["inplane_rotation"][1].y.x.x) - np.asarray(inf.y.x.x))[side].max()
+    moved = np.abs(np.asarray(y.x.x) - np.asarray(m.x_ref.x))[side].max()
     assert moved > 1e-3
 
 
-@pytest.mark.parametrize("case,mass", [("inplane_rotation", 17.4026), ("sidewall_translation", 70.75)])
-def test_no_damping_gives_no_decay(coarse_tire, runs, case, mass):
-    ts, dec = runs["undamped"][case]
-    s = dec.saved
-    field, comp = sidewall.CASES[case][2]
-    x0 = sidewall.coordinate(case, sidewall.belt_pose(coarse_tire.model, runs[P_HI]["inf"].y))
-    x = np.asarray(s[field])[:, comp] - x0
-    fd = free_decay(ts, x, mass, t_start=float(ts[0]) + 1e-3, x_final=0.0)
-    assert fd.xi_fit < TOL_XI_UNDAMPED_FIT, fd.xi_fit
-    assert fd.two_peak_ok and fd.xi_2p < TOL_XI_UNDAMPED_2P, (fd.two_peak_reason, fd.xi_2p)
-    # nothing dissipated, no artificial damping: exactly zero
-    assert np.ptp(np.asarray(s["dissipated"])) == 0.0
-    assert np.ptp(np.asarray(s["settle_work"])) == 0.0
-
-
-def test_translation_runner(coarse_tire, proto):
-    """The registered E07 runner: never reads the load, positive stiffness and damping, a clean
-    single-DOF decay, no artificial damping in the release."""
-    cond = NoLoad(pressure_Pa=P_HI, load_N=45e3)
-    res = REGISTRY["sidewall_translation"].runner(coarse_tire, cond, proto, force_kN=2e3, decay_s=DECAY,
-                                                  release_ramp_ms=1e-3, mass_kg=70.75)
+@pytest.mark.parametrize("name", ["inplane_rotation", "sidewall_translation"])
+def test_no_damping_gives_no_decay(undamped, name):
+    res = ok(undamped[name].results[0])
     q, c = res.quantities, res.checks
-    assert res.condition == {"pressure_Pa": P_HI}
+    assert q["xi_fit"] < TOL_XI_UNDAMPED_FIT, q["xi_fit"]
+    assert c["release_two_peak_ok"] and q["xi_2p"] < TOL_XI_UNDAMPED_2P, (c["release_two_peak_reason"], q["xi_2p"])
+    # nothing dissipated, no artificial damping: exactly zero
+    assert c["release_rubber_dissipated_J"] == 0.0
+    assert c["release_settle_work_J"] == 0.0
+
+
+def test_translation_result(sidewall_runs, spec):
+    """E07: positive stiffness and damping, a clean single-DOF decay, no artificial damping in the
+    release, M = m_b from the tire config."""
+    res = ok(sidewall_runs["sidewall_translation"][P_RATED].results[0])
+    q, c = res.quantities, res.checks
+    assert res.condition == {"pressure_Pa": P_RATED}  # the load is not part of the result
     assert np.isfinite(q["k_by_N_per_m"]) and q["k_by_N_per_m"] > 0
-    assert q["load_N"] == pytest.approx(4e3)
+    assert q["load_N"] == pytest.approx(2 * 2e3)  # 2 kN at the top and at the bottom
+    assert q["decay_mass_kg"] == spec.masses.belt
     for key in ("C_by_Ns_per_m", "C_by_2p_Ns_per_m", "C_by_fit_Ns_per_m", "xi_2p", "xi_fit"):
         assert np.isfinite(q[key]) and q[key] > 0, key
     # loss tangents are 0.10-0.15, so a modal damping ratio cannot exceed ~tan(delta)/2
@@ -163,15 +143,36 @@ def test_translation_runner(coarse_tire, proto):
     assert abs(c["k_dynamic_vs_static_rel"]) < TOL_SDOF, c["k_dynamic_vs_static_rel"]
     assert c["release_settle_work_J"] == 0.0
     assert c["release_rubber_dissipated_J"] > 0
-    assert c["belt_rigidity_error_m"] < TOL_RIGID_M
-    assert c["cross_motion_max"] < TOL_CROSS
     assert len(res.signals["time_s"]) == len(res.signals["y_m"])
 
 
+def test_decay_mass_from_the_tire_config(sidewall_runs, spec):
+    # M of C = 2 M omega_n: the tire config's [reference] inertias (the study's), no experiment field
+    q5 = ok(sidewall_runs["inplane_rotation"][P_RATED].results[0]).quantities
+    q8 = ok(sidewall_runs["sidewall_camber"][P_RATED].results[0]).quantities
+    assert q5["decay_inertia_kgm2"] == spec.reference["belt_Iy_kgm2"] > 0
+    assert q8["decay_inertia_kgm2"] == spec.reference["belt_Ix_kgm2"] > 0
+
+
+@pytest.mark.parametrize("name", SIDEWALL)
+def test_rigid_belt_programs_never_read_the_load(coarse_tire, sidewall_runs, name):
+    """The traced program does not depend on the case's load: in its jaxpr no equation reads it
+    (tracing reuses the cached phase program; nothing runs)."""
+    exp = sidewall_runs[name][P_RATED].exp
+    m, p = coarse_tire.model, coarse_tire.params
+
+    def sim(load):
+        return exp.simulate(m, p, Case(load, f64(P_RATED), f64(2e-5), f64(np.zeros(0))))
+
+    closed = jax.make_jaxpr(sim)(jnp.float64(45e3))
+    load_var = closed.jaxpr.invars[0]
+    assert all(load_var not in eqn.invars for eqn in closed.jaxpr.eqns)
+    assert load_var not in closed.jaxpr.outvars
+
+
 def test_registry_and_configs_do_not_need_a_load():
-    for name in ("inplane_rotation", "sidewall_translation", "sidewall_camber"):
-        assert REGISTRY[name].needs_load is False
-        _, exps, cond, _ = load_run_config(REPO / "configs" / "experiments" / f"{name}.toml",
-                                           ["condition.load_kg=4625"])
-        assert exps[0][0].name == name
-        assert "load_N" not in cond  # a load given in the file is ignored, never passed on
+    for name in SIDEWALL:
+        assert REGISTRY[name].needs_load is False and REGISTRY[name].per_pressure is True
+        rc = load_run_config(REPO / "configs" / "experiments" / f"{name}.toml", ["condition.load_kg=4625"])
+        assert rc.experiments[0].name == name
+        assert "load_N" not in rc.condition  # a load given in the file is ignored, never passed on

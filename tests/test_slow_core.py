@@ -1,4 +1,8 @@
-"""Slow checks (run with `python -m pytest -m slow`): mesh convergence and solver gradients."""
+"""Slow checks (run with `python -m pytest -m slow`): mesh convergence and solver gradients.
+
+Slow because each compiles programs of its own: the default and a finer mesh (minutes each), and a
+forward-mode (jvp) program through the integration.
+"""
 
 import dataclasses
 
@@ -7,18 +11,21 @@ import jax
 import jax.numpy as jnp
 import pytest
 
-from jtire import solve, units as U
-from jtire.experiments import phases, static
+from jtire import batch, solve, units as U
+from jtire.experiments import phases
+from jtire.state import TireState
 from jtire.tire import make_tire
+
+from .conftest import RATED, make_experiment, ok
 
 pytestmark = pytest.mark.slow
 
 
 def _k_sv(spec, protocol):
     tire = make_tire(spec)
-    cond = dict(pressure_Pa=120 * U.PSI, load_N=4625 * U.G0)
-    res = static.run_vertical_stiffness(tire, cond, protocol, 60e3, cond["load_N"], 0.3, (10e3, 60e3))
-    return res.quantities["k_sv_N_per_m"]
+    exp = make_experiment("vertical_stiffness", protocol, spec, ramp_s=0.3)
+    (res,) = batch.run(exp, tire, [RATED], devices=1)
+    return ok(res).quantities["k_sv_N_per_m"]
 
 
 def test_mesh_convergence_of_vertical_stiffness(spec, protocol):
@@ -32,14 +39,17 @@ def test_solver_derivative_matches_finite_differences(coarse_tire):
     """d(cavity volume after 10 ms of inflation)/d(crown belt modulus): forward-mode through
     diffeqsolve against a central difference (rel 1e-5: float64, smooth dynamics, h = 1e-4)."""
     m, p = coarse_tire.model, coarse_tire.params.without_damping()
-    proto = phases.Protocol.from_dict(dict(settle_damping=300.0, ke_tol=1e-9, inflate_ramp=0.01, inflate_max=0.01,
-                                           load_ramp=0.1, settle_max=0.1))
     dt = solve.stable_step(m, p, 8e5, 300.0)
+    drive = phases.make_drive(8e5, dt, pressure0=0.0, t0=0.0, t1=0.01, surface=phases.flat_road(-phases.FAR),
+                              damping=300.0)
+    y0 = TireState.at_rest(m, len(p.relaxation_times))
+    ts = jnp.linspace(0.0, 0.01, solve.N_SAVE)
 
     @eqx.filter_jit
     def volume(scale):
         pp = eqx.tree_at(lambda q: q.E_circumferential, p, p.E_circumferential.at[-1].multiply(scale))
-        res = phases.inflate(m, pp, 8e5, dt, proto, solve.MAX_STEPS)
+        res = solve.run_phase(m, pp, drive, y0, jnp.float64(0.0), jnp.float64(0.01), ts, jnp.float64(jnp.inf),
+                              jnp.float64(1e-9), solve.MAX_STEPS)
         return res.saved["volume"][-1]
 
     _, tangent = jax.jvp(volume, (jnp.asarray(1.0),), (jnp.asarray(1.0),))
@@ -50,9 +60,8 @@ def test_solver_derivative_matches_finite_differences(coarse_tire):
 
 
 def test_footprint_shortens_with_pressure_on_the_default_mesh(spec, protocol):
-    from jtire import sweep
-
-    conds = [dict(pressure_Pa=p * U.PSI, load_N=4625 * U.G0) for p in (70.0, 120.0, 150.0)]
-    res = sweep.run_static_batch(make_tire(spec), conds, protocol, "footprint", {})
-    lengths = [r.quantities["contact_length_m"] for r in res]
+    conds = [dict(pressure_Pa=p * U.PSI, load_N=RATED["load_N"]) for p in (70.0, 120.0, 150.0)]
+    exp = make_experiment("footprint", protocol, spec)
+    res = batch.run(exp, make_tire(spec), conds)
+    lengths = [ok(r).quantities["contact_length_m"] for r in res]
     assert lengths[0] > lengths[1] > lengths[2], lengths

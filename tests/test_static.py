@@ -1,47 +1,37 @@
-"""Static experiments on the coarse ring: equilibrium, symmetry and the expected trends.
+"""Static experiments on the coarse ring (E01 footprint, E02 vertical stiffness): equilibrium,
+symmetry and the expected trends.
 
-One vmapped batch runs four conditions (load and pressure varied) so the program is compiled
-once; the assertions are physical trends and balances, not the reported numbers (those come from
-the default mesh, see README and benchmarks).
+E01 runs as one batch of four conditions (load and pressure varied) on the shared grid program;
+the assertions are physical trends and balances, not the reported numbers (those come from the
+default mesh, see README and benchmarks).
 """
 
 import numpy as np
 import pytest
 
-from jtire import sweep, units as U
+from jtire.config import load_run_config
+from jtire.errors import ConfigError
+
+from .conftest import LOAD_RATED, REPO, ok
 
 
-@pytest.fixture(scope="module")
-def footprints(coarse_tire, protocol):
-    conds = [dict(pressure_Pa=120 * U.PSI, load_N=2312.5 * U.G0), dict(pressure_Pa=120 * U.PSI, load_N=4625 * U.G0),
-             dict(pressure_Pa=150 * U.PSI, load_N=4625 * U.G0), dict(pressure_Pa=70 * U.PSI, load_N=4625 * U.G0)]
-    before = sweep.TRACES
-    res = sweep.run_static_batch(coarse_tire, conds, protocol, "footprint", {})
-    return res, sweep.TRACES - before
-
-
-def test_sweep_compiles_once(footprints):
-    # inflation and loading phases share one traced (and compiled) batched program
-    assert footprints[1] == 1
-
-
-def test_settled_and_contact_force_equals_load(footprints):
-    for r in footprints[0]:
+def test_settled_and_contact_force_equals_load(e01_grid):
+    for r in map(ok, e01_grid.results):
         assert r.checks["inflate_settled"] and r.checks["load_settled"]
         # at rest the road carries the applied load: 0.5 % (the settle tolerance leaves
         # ~1e-3 J of motion, far below this)
         assert r.checks["contact_vs_load_rel_error"] < 0.005
 
 
-def test_pure_vertical_load_gives_no_lateral_force_and_a_symmetric_patch(footprints, coarse_tire):
-    for r in footprints[0]:
+def test_pure_vertical_load_gives_no_lateral_force(e01_grid):
+    for r in map(ok, e01_grid.results):
         # mirror-symmetric mesh and load: lateral force below 1e-6 of the load (rounding of
         # 1e5-1e8 N/m stiffnesses) -- a sign error in any term would show at the % level
         assert abs(r.checks["contact_lateral_force_N"]) < 1e-6 * r.condition["load_N"]
 
 
-def test_footprint_grows_with_load_and_shortens_with_pressure(footprints):
-    light, rated, high_p, low_p = (r.quantities for r in footprints[0])
+def test_footprint_grows_with_load_and_shortens_with_pressure(e01_grid):
+    light, rated, high_p, low_p = (ok(r).quantities for r in e01_grid.results)
     assert rated["contact_length_m"] > light["contact_length_m"]
     assert rated["contact_area_m2"] > light["contact_area_m2"]
     # pressure: the patch area shrinks 70 -> 120 -> 150 psi; its length shortens clearly from 70
@@ -51,8 +41,48 @@ def test_footprint_grows_with_load_and_shortens_with_pressure(footprints):
     assert rated["contact_length_m"] < 0.95 * low_p["contact_length_m"]
 
 
-def test_vertical_stiffness_rises_with_pressure(footprints):
-    _, rated, high_p, low_p = (r.quantities for r in footprints[0])
+def test_vertical_stiffness_rises_with_pressure(e01_grid):
+    _, rated, high_p, low_p = (ok(r).quantities for r in e01_grid.results)
     assert low_p["k_secant_N_per_m"] < rated["k_secant_N_per_m"] < high_p["k_secant_N_per_m"]
     # and stays within a credible band of the study's 1280 kN/m at rated (coarse mesh: 40 %)
     assert rated["k_secant_N_per_m"] == pytest.approx(1.28e6, rel=0.4)
+
+
+def test_footprint_quantities_consistent(e01_grid, spec):
+    for r in map(ok, e01_grid.results):
+        q = r.quantities
+        assert q["contact_half_length_m"] == q["contact_length_m"] / 2
+        # the patch is a cut of the tread surface: inside the length x width rectangle, and more
+        # than half of it (an ellipse would fill pi/4)
+        assert 0.5 * q["contact_length_m"] * q["contact_width_m"] < q["contact_area_m2"] < \
+            q["contact_length_m"] * q["contact_width_m"]
+        # the width never exceeds the tread
+        assert q["contact_width_m"] <= spec.geometry.tread_width + 1e-9
+        assert q["k_secant_N_per_m"] == pytest.approx(r.condition["load_N"] / q["deflection_m"], rel=1e-12)
+
+
+def test_vertical_stiffness_ramp(e02):
+    """E02 on the coarse ring with a 0.15 s ramp (was tests/test_cli_static.py, through the CLI)."""
+    r = ok(e02.results[0])
+    q, c = r.quantities, r.checks
+    assert 5e5 < q["k_sv_N_per_m"] < 3e6 and 0.01 < q["deflection_m"] < 0.08
+    assert q["stated_load_N"] == LOAD_RATED  # stated_load_kN = 0: the condition's load
+    assert c["load_settled"] and c["quasi_static_deflection_rel_error"] < 0.02
+    # the fitted slope over 10-60 kN and the secant at the stated load describe one curve: the secant
+    # of a stiffening curve lies below its upper-range slope, within 30 %
+    assert q["fit_r2"] > 0.99
+    assert 0.7 < q["k_sv_N_per_m"] / q["k_sv_fit_N_per_m"] < 1.3
+    loads = np.asarray(r.signals["load_N"])
+    assert np.all(np.diff(loads) >= 0) and loads[-1] > 0.95 * 60e3
+    assert {"time_s", "load_N", "deflection_m", "contact_force_N"} <= set(r.signals)
+
+
+@pytest.mark.parametrize("override, message", [
+    (["vertical_stiffness.stated_load_kN=70"], "stated_load_kN = 70: must be at most max_load_kN"),
+    (["vertical_stiffness.fit_range_kN=[10.0, 80.0]"], "fit_range_kN = \\[10, 80\\]: must end at or below"),
+    (["vertical_stiffness.stated_load_kN=0", "condition.load_kg=7000"],
+     "the stated load 68.67 kN must be in \\(0, max_load_kN = 60\\]"),
+])
+def test_vertical_stiffness_inconsistent_settings_refused(override, message):
+    with pytest.raises(ConfigError, match=message):
+        load_run_config(REPO / "configs" / "experiments" / "vertical_stiffness.toml", override)

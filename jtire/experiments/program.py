@@ -100,16 +100,17 @@ def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
     y, t = y0, f64(0.0)
     mem = {k: f64(v) for k, v in mem0.items()}
     outs = []
-    for i, branch in enumerate(branches):
+    for branch in branches:
         ph, mem = branch(y, t, mem)
-        if i == 0:
-            # tie the start state and time to the case (+ 0 dt): under vmap they then carry the batch
-            # axis like every later phase's, so the first phase shares the later phases' compiled
-            # program instead of compiling one of its own (unbatched start state)
-            z = 0.0 * ph.drive.dt
-            ph = eqx.tree_at(lambda p: p.y0, ph, jax.tree_util.tree_map(lambda a: a + z.astype(a.dtype), ph.y0))
-            t = t + z
-        out, y = run_one(model, params, ph, t, ke_tol, n_save)
+        # Tie every input of the phase program to the case (+ 0 dt): under vmap every leaf then carries
+        # the batch axis and the batch's sharding. A compiled (vmapped) program is specific to which
+        # of its inputs are batched and how they are placed, so without this each experiment (a load
+        # that is a case value in one and a table setting in another, a surface that moves in one and
+        # not in another) and even each phase of one experiment (the first one's unbatched start
+        # state) compiled a program of its own, and sharded batches traced it again per pattern.
+        z = 0.0 * ph.drive.dt
+        ph = jax.tree_util.tree_map(lambda a: a + z.astype(a.dtype), ph)
+        out, y = run_one(model, params, ph, t + z, ke_tol + z, n_save)
         outs.append(out)
         t = out.t_end
     return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *outs), y, mem

@@ -111,7 +111,8 @@ class _Sidewall(Experiment):
 
         y0 = TireState.at_rest(model, len(params.relaxation_times))
         outs, y, mem = run_plan(model, params, [inflate, hold, release], y0, {"r": 0.0}, proto.ke_tol, self.n_save)
-        return {"phases": outs, "r": mem["r"]}
+        # the end state too: the tests check on it that the belt stayed rigid through every phase
+        return {"phases": outs, "r": mem["r"], "y": y}
 
     def _coord(self, ph):
         """The measured coordinate at the end of a phase (last saved sample; the phase settled)."""

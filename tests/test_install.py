@@ -1,0 +1,50 @@
+"""The package as a user gets it: build the wheel, install it into a fresh virtual environment, and
+run `jtire` from a folder that is not the repository (the configs must come from the package data).
+
+Slow: building and installing (dependencies from the pip cache or index) take minutes.
+"""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from .conftest import COARSE_SET, REPO, SOLVER_SET
+
+pytestmark = pytest.mark.slow
+
+
+def _run(args, **kw):
+    p = subprocess.run([str(a) for a in args], capture_output=True, text=True, **kw)
+    assert p.returncode == 0, f"{args}: {p.stdout[-2000:]}\n{p.stderr[-4000:]}"
+    return p
+
+
+def test_wheel_installs_and_runs(tmp_path):
+    wheels = tmp_path / "wheels"
+    _run([sys.executable, "-m", "pip", "wheel", REPO, "--no-deps", "-q", "-w", wheels], timeout=600)
+    (wheel,) = wheels.glob("jtire-*.whl")
+    venv = tmp_path / "venv"
+    _run([sys.executable, "-m", "venv", venv], timeout=300)
+    bin_ = venv / "bin"
+    _run([bin_ / "python", "-m", "pip", "install", "-q", wheel], timeout=1800)
+    jtire = bin_ / "jtire"
+    work = tmp_path / "elsewhere"
+    work.mkdir()
+    env = {k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV", "PYTHONPATH")}
+    env |= {"PATH": f"{bin_}{os.pathsep}{env.get('PATH', '')}", "MPLBACKEND": "Agg"}
+    # the installed package, not the checkout
+    where = _run([bin_ / "python", "-c", "import jtire, sys; print(jtire.__file__)"], cwd=work, env=env).stdout
+    assert Path(where.strip()).is_relative_to(venv)
+    assert "--set KEY=VALUE" in _run([jtire, "run", "--help"], cwd=work, env=env).stdout
+    # one short run: the shipped default config (E01, E02, E09 at rated) on the coarse ring
+    sets = [a for s in COARSE_SET + SOLVER_SET + ["vertical_stiffness.ramp_s=0.15"] for a in ("--set", s)]
+    p = _run([jtire, "run", *sets, "--out", "out"], cwd=work, env=env, timeout=1800)
+    assert "footprint: pressure 827.4 kPa" in p.stdout
+    for name in ("footprint", "vertical_stiffness", "lateral_stiffness"):
+        d = json.loads((work / "out" / name / "result.json").read_text())
+        assert d["checks"]["load_settled"], name
+    assert (work / "out" / "summary.csv").is_file()

@@ -1,0 +1,234 @@
+"""Every command the README shows is run by a test here, as a user runs it, with coarse and short
+overrides appended (the coarse ring and the suite's protocol: the programs the other tests compiled).
+
+`test_every_readme_command_is_covered` extracts the commands from README.md (code blocks and inline
+code: `jtire ...`, `... --option` continuing the command before it, the figure scripts) and fails
+on any command no test below claims in COVERED: a new README command needs its test here.
+
+Commands run from a fresh folder holding a link to the repository's configs/, so relative paths
+(configs/..., runs/...) mean what they mean to a user in the repository.
+"""
+
+import csv
+import importlib.util
+import json
+import re
+import shlex
+import sys
+
+import pytest
+
+from jtire.cli import main
+from jtire.config import load_run_config
+
+from .conftest import COARSE_SET, REPO, SOLVER_SET
+
+README = REPO / "README.md"
+QUICK_SIM = [a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)]
+E02_SHORT = ["--set", "vertical_stiffness.ramp_s=0.15"]  # 2 % quasi-static on the coarse ring
+GRID_2X2 = ["--set", "sweep.loads_kg=[2312.5, 4625.0]", "--set", "sweep.pressures_psi=[120.0, 150.0]"]
+
+# README command (regex, whole string) -> the test below that runs it. Not commands of the package, so not
+# here: `pip install -e .` (tests/test_install.py installs the wheel), `python -m pytest` (this suite),
+# `python benchmarks/...` (timing scripts, minutes each).
+COVERED = {
+    r"jtire run": "test_default_run",
+    r"jtire run configs/experiments/footprint\.toml --out runs/e01": "test_run_footprint_out",
+    r"jtire run configs/experiments/vertical_stiffness\.toml --set condition\.pressure_psi=70": "test_run_set_condition",
+    r"jtire run configs/experiments/footprint\.toml --set tire\.mesh\.n_theta=48": "test_run_set_tire_mesh",
+    r"jtire sweep configs/experiments/footprint\.toml --out runs/grid": "test_sweep_grid",
+    r"jtire data( --out runs/data)?": "test_data",
+    r"jtire compete configs/calibration/soil_competition\.toml": "test_compete",
+    r"jtire calibrate configs/calibration/study\.toml --out runs/calibrate/study": "test_calibrate_sensitivity_sample",
+    r"jtire sensitivity configs/calibration/study\.toml --at runs/calibrate/study": "test_calibrate_sensitivity_sample",
+    r"jtire sample( configs/calibration/posterior\.toml --out runs/sample/study --check)?":
+        "test_calibrate_sensitivity_sample",
+    r"jtire calibrate configs/calibration/study\.toml --out runs/calibrate/study --method lm": "test_calibrate_lm",
+    r"jtire export-tir( \S+)*": "test_export_tir",
+    r"python paper_figures/(fig\w+)\.py": "test_figure_scripts",
+}
+EXCLUDED = (r"pip install.*", r"python -m pytest.*", r"python benchmarks/.*")
+FIGURES = ("fig3_5_track_rrc", "fig3_7_sandbox_rrc", "fig4_2_competition")
+
+
+def readme_commands(text: str) -> list:
+    """The commands README.md shows: lines of code blocks and inline code spans starting with `jtire`
+    (or `python`), `... --opt` spans continuing the previous command, and bare `figN_*.py` names."""
+    found, last = [], None
+    blocks = re.split(r"^```.*$", text, flags=re.M)
+    for k, part in enumerate(blocks):
+        if k % 2:  # inside a code block: one command per line, comments dropped
+            spans = [ln.split("#", 1)[0] for ln in part.splitlines()]
+        else:
+            spans = re.findall(r"`([^`\n]+)`", part)
+        for span in spans:
+            for piece in span.split("&&"):
+                s = " ".join(piece.split())
+                if s.startswith("... ") and last is not None:
+                    s = last + s[3:]
+                elif re.fullmatch(r"fig\w+\.py", s):
+                    s = "python paper_figures/" + s
+                if s == "jtire" or s.startswith(("jtire ", "python ", "pip ")):
+                    found.append(s)
+                    if s.startswith("jtire "):
+                        last = s
+    return list(dict.fromkeys(found))
+
+
+def test_every_readme_command_is_covered():
+    commands = readme_commands(README.read_text())
+    assert any(c.startswith("jtire run") for c in commands)  # the extraction finds commands at all
+    missing = [c for c in commands if not any(re.fullmatch(p, c) for p in EXCLUDED)
+               and not any(re.fullmatch(p, c) for p in COVERED)]
+    assert not missing, f"README commands without a test in {__file__} (add one and a COVERED entry): {missing}"
+    module = sys.modules[__name__]
+    assert all(callable(getattr(module, name, None)) for name in COVERED.values())
+    figures = {m.group(1) for c in commands for m in [re.fullmatch(COVERED[r"python paper_figures/(fig\w+)\.py"], c)] if m}
+    assert figures <= set(FIGURES), f"figure scripts in the README not run by test_figure_scripts: {figures - set(FIGURES)}"
+
+
+def test_extraction_rules():
+    text = ("x `jtire run` y `jtire/config.py` z\n| a | `jtire calibrate c.toml --out d` |\n| b | `... --method lm` |\n"
+            "```bash\npip install -e . && jtire run   # comment\n```\n`python paper_figures/f1.py`, `fig2_x.py`")
+    assert readme_commands(text) == ["jtire run", "jtire calibrate c.toml --out d", "jtire calibrate c.toml --out d --method lm",
+                                     "pip install -e .", "python paper_figures/f1.py", "python paper_figures/fig2_x.py"]
+
+
+@pytest.fixture
+def user_dir(tmp_path, monkeypatch):
+    """A fresh working folder with configs/ linked from the repository (a user's checkout)."""
+    (tmp_path / "configs").symlink_to(REPO / "configs", target_is_directory=True)
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def jtire(command: str, *extra) -> int:
+    argv = shlex.split(command)
+    assert argv[0] == "jtire"
+    return main(argv[1:] + list(extra))
+
+
+# ---- running experiments ----------------------------------------------------------------------------
+def test_default_run(user_dir, capsys, e01_grid):
+    """`jtire run`: E01, E02 and E09 at the rated condition, a table printed for each."""
+    assert jtire("jtire run", *QUICK_SIM, *E02_SHORT) == 0
+    out = capsys.readouterr().out
+    for name in ("footprint", "vertical_stiffness", "lateral_stiffness"):
+        assert f"{name}: pressure 827.4 kPa, load 45.371 kN" in out
+    for q in ("contact_length_m", "k_sv_N_per_m", "k_l_N_per_m"):
+        assert q in out
+    settled = [ln.split()[1] for ln in out.splitlines() if ln.split()[:1] == ["settled"]]
+    assert settled == ["True"] * 3
+
+
+def test_run_footprint_out(user_dir, capsys, e01_grid, e01_singles):
+    assert jtire("jtire run configs/experiments/footprint.toml --out runs/e01", *QUICK_SIM) == 0
+    d = json.loads((user_dir / "runs" / "e01" / "result.json").read_text())
+    assert set(d) == {"experiment", "condition", "quantities", "checks", "info"}
+    assert d["experiment"] == "footprint" and d["checks"]["load_settled"]
+    # the command runs the very computation of the in-process single run at the same condition
+    # (same program, same case): the same numbers
+    assert d["quantities"]["contact_length_m"] == pytest.approx(
+        e01_singles[1].results[0].quantities["contact_length_m"], rel=1e-12)
+    assert "results written to runs/e01/" in capsys.readouterr().out
+
+
+def test_run_set_condition(user_dir, capsys, e01_grid):
+    """E02 at 70 psi, with --out: result.json and signals.csv (was tests/test_cli_static.py)."""
+    cmd = "jtire run configs/experiments/vertical_stiffness.toml --set condition.pressure_psi=70"
+    assert jtire(cmd, *QUICK_SIM, *E02_SHORT, "--out", "runs/e02") == 0
+    printed = capsys.readouterr().out
+    assert "k_sv_N_per_m" in printed and "settled" in printed and "482.6 kPa" in printed
+    out = user_dir / "runs" / "e02"
+    d = json.loads((out / "result.json").read_text())
+    assert d["experiment"] == "vertical_stiffness"
+    assert set(d["condition"]) == {"pressure_Pa", "load_N"}
+    assert d["condition"]["pressure_Pa"] == pytest.approx(70 * 6894.757293168)
+    q = d["quantities"]
+    assert 5e5 < q["k_sv_N_per_m"] < 3e6 and 0.01 < q["deflection_m"] < 0.08
+    assert q["stated_load_N"] == pytest.approx(50e3)  # the config's stated load
+    assert d["checks"]["load_settled"] and d["checks"]["quasi_static_deflection_rel_error"] < 0.02
+    rows = list(csv.DictReader((out / "signals.csv").open()))
+    assert {"time_s", "load_N", "deflection_m", "contact_force_N"} <= set(rows[0])
+    loads = [float(r["load_N"]) for r in rows]
+    assert loads == sorted(loads) and loads[-1] > 0.95 * 60e3
+
+
+def test_run_set_tire_mesh(user_dir, capsys, e01_grid):
+    """The tire override reaches the tire (48 segments); the run itself is made on the coarse ring
+    (the later --set wins): a 48-segment program would cost another 1-2 min of compilation."""
+    cmd = "jtire run configs/experiments/footprint.toml --set tire.mesh.n_theta=48"
+    assert load_run_config("configs/experiments/footprint.toml", shlex.split(cmd)[4::2]).tire.n_theta == 48
+    assert jtire(cmd, *QUICK_SIM) == 0
+    assert "contact_length_m" in capsys.readouterr().out
+
+
+def test_sweep_grid(user_dir, capsys, e01_grid):
+    """The 3 x 3 grid shrunk to 2 x 2 (4 cases on 2 devices: the suite's grid program)."""
+    assert jtire("jtire sweep configs/experiments/footprint.toml --out runs/grid", *QUICK_SIM, *GRID_2X2) == 0
+    out = user_dir / "runs" / "grid"
+    cases = sorted(p.name for p in (out / "cases").iterdir())
+    assert cases == ["000_p120psi_l2312.5kg", "001_p120psi_l4625kg", "002_p150psi_l2312.5kg", "003_p150psi_l4625kg"]
+    rows = list(csv.DictReader((out / "summary.csv").open()))
+    assert [r["case"] for r in rows] == cases and all(float(r["contact_length_m"]) > 0 for r in rows)
+    assert (out / "settings.json").is_file()
+    assert "summary written to" in capsys.readouterr().out
+
+
+# ---- data, competition, figures -----------------------------------------------------------------
+def test_data(user_dir, capsys):
+    assert jtire("jtire data --out runs/data") == 0
+    assert any((user_dir / "runs" / "data").iterdir())
+    assert jtire("jtire data") == 0
+    assert "RRC" in capsys.readouterr().out
+
+
+def test_compete(user_dir, capsys):
+    """On the soil FE model, --quick: 3 seeds x 20 calls."""
+    assert jtire("jtire compete configs/calibration/soil_competition.toml", "--quick") == 0
+    assert "ARSM" in capsys.readouterr().out
+    assert (user_dir / "runs" / "compete" / "soil" / "progression.png").is_file()
+
+
+def test_figure_scripts(user_dir):
+    for name in FIGURES:
+        spec = importlib.util.spec_from_file_location(name, REPO / "paper_figures" / f"{name}.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        png = user_dir / f"{name}.png"
+        assert mod.main(["--quick", "--out", str(png)]) == 0, name
+        assert png.stat().st_size > 10_000, name
+
+
+# ---- calibration (on the closed-form stand-in: the shell simulator is the slow path) -------------------
+def test_calibrate_sensitivity_sample(user_dir, capsys):
+    """The README's order: calibrate into runs/calibrate/study, sensitivities there, the posterior
+    from its history (the config's default history folder, relative to the working folder)."""
+    assert jtire("jtire calibrate configs/calibration/study.toml --out runs/calibrate/study", "--standin") == 0
+    assert (user_dir / "runs" / "calibrate" / "study" / "calibrated_tire.toml").is_file()
+    assert jtire("jtire sensitivity configs/calibration/study.toml --at runs/calibrate/study", "--standin",
+                 "--out", "runs/sensitivity") == 0
+    assert "singular values" in capsys.readouterr().out
+    rc = jtire("jtire sample configs/calibration/posterior.toml --out runs/sample/study --check", "--standin",
+               "--set", "sampler.max_steps=60", "--set", "sampler.check_every=30",
+               "--set", 'emulator.candidates=["linear", "reduced"]')
+    text = capsys.readouterr().out
+    assert rc == 1 and "NOT CONVERGED" in text  # 60 steps: far below 50 autocorrelation times, and it says so
+    assert (user_dir / "runs" / "sample" / "study" / "check.json").is_file()
+
+
+def test_calibrate_lm(user_dir, capsys):
+    cmd = "jtire calibrate configs/calibration/study.toml --out runs/calibrate/study --method lm"
+    assert jtire(cmd, "--standin", "--budget", "12") == 0
+    assert "lm:" in capsys.readouterr().out
+
+
+def test_export_tir(user_dir, capsys):
+    """From a synthetic characterization (the rigid-ring tests' fixture), as `jtire export-tir DIR`."""
+    from jtire.rigid_ring import synthetic
+    from jtire.rigid_ring.table import write_characterization
+
+    write_characterization(user_dir / "runs" / "characterize", synthetic.characterization())
+    assert jtire("jtire export-tir runs/characterize", "--out", "runs/rigid_ring.tir") == 0
+    assert (user_dir / "runs" / "rigid_ring.tir").is_file()
+    assert "wrote" in capsys.readouterr().out

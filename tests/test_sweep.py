@@ -1,0 +1,137 @@
+"""`jtire sweep`: a sweep killed mid-way resumes without recomputing what it finished; a folder made
+with other settings refuses in one line; case folder names cannot collide.
+
+The killed sweep runs in a subprocess (the real command, SIGKILLed): 4 cases of E01 on the coarse ring
+in batches of one (`--batch 1`: one case on one device, the program the in-process single runs
+compiled, loaded from the persistent cache instead of compiled again).
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from jtire import units as U
+from jtire.cli import main
+from jtire.cli.sweep import case_name, grid_conditions
+from jtire.config import load_run_config
+from jtire.errors import ConfigError
+
+from .conftest import COARSE_SET, REPO, SOLVER_SET
+
+FOOTPRINT = REPO / "configs" / "experiments" / "footprint.toml"
+ARGS = [str(FOOTPRINT), *[a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)],
+        "--set", "sweep.loads_kg=[2312.5, 4625.0]", "--set", "sweep.pressures_psi=[120.0, 150.0]", "--batch", "1"]
+CMD = [sys.executable, "-c", "import sys; from jtire.cli import main; sys.exit(main(sys.argv[1:]))", "sweep"]
+N_CASES = 4
+TIMEOUT_S = 900  # a cold start (nothing in the compilation cache) compiles the program: minutes
+
+
+def results(out):
+    return sorted((out / "cases").glob("*/result.json"))
+
+
+@pytest.fixture(scope="module")
+def killed_and_resumed(tmp_path_factory, e01_singles):
+    """Start the sweep, SIGKILL it as soon as its first case is written, run it again to the end.
+    Returns (out folder, {file: (bytes, mtime_ns)} of the cases finished before the kill, the rerun's
+    CompletedProcess)."""
+    out = tmp_path_factory.mktemp("sweep") / "grid"
+    env = dict(os.environ, MPLBACKEND="Agg")
+    p = subprocess.Popen(CMD + ARGS + ["--out", str(out)], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    t0 = time.monotonic()
+    try:
+        while not results(out):
+            assert p.poll() is None, f"the sweep ended before its first case: {p.communicate()[1].decode()[-2000:]}"
+            assert time.monotonic() - t0 < TIMEOUT_S, "no case finished in time"
+            time.sleep(0.2)
+    finally:
+        p.send_signal(signal.SIGKILL)
+        p.wait()
+    done = {f: (f.read_bytes(), f.stat().st_mtime_ns) for f in results(out)}
+    assert 0 < len(done) < N_CASES, "killed too late to test a resume"
+    again = subprocess.run(CMD + ARGS + ["--out", str(out)], env=env, capture_output=True, text=True, timeout=TIMEOUT_S)
+    return out, done, again
+
+
+def test_killed_sweep_resumes_without_recomputing(killed_and_resumed):
+    out, done, again = killed_and_resumed
+    assert again.returncode == 0, again.stderr[-2000:]
+    assert f"resuming: {len(done)} of {N_CASES} cases already done" in again.stderr
+    for f, (data, mtime) in done.items():
+        assert f.read_bytes() == data and f.stat().st_mtime_ns == mtime, f"{f}: rewritten by the resume"
+    assert len(results(out)) == N_CASES
+    rows = (out / "summary.csv").read_text().splitlines()
+    assert len(rows) == 1 + N_CASES
+    for f in results(out):
+        d = json.loads(f.read_text())
+        assert d["checks"]["load_settled"] and d["quantities"]["contact_length_m"] > 0
+
+
+def test_finished_sweep_rerun_computes_nothing(killed_and_resumed, capsys):
+    out, _, _ = killed_and_resumed
+    before = {f: f.stat().st_mtime_ns for f in results(out)}
+    assert main(["sweep", *ARGS, "--out", str(out)]) == 0
+    assert f"resuming: {N_CASES} of {N_CASES} cases already done" in capsys.readouterr().err
+    assert {f: f.stat().st_mtime_ns for f in results(out)} == before
+
+
+@pytest.mark.parametrize("other", [["--set", "solver.ke_tol_J=0.002"],  # other settings
+                                   ["--set", "sweep.loads_kg=[2312.5, 4000.0]"],  # another grid
+                                   ["--set", "tire.tread.friction=0.7"]])  # another tire
+def test_rerun_with_other_settings_refuses_in_one_line(killed_and_resumed, capsys, other):
+    out, _, _ = killed_and_resumed
+    before = {f: f.stat().st_mtime_ns for f in results(out)}
+    assert main(["sweep", *ARGS, *other, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "Traceback" not in err, err
+    assert err.startswith("jtire sweep: error: ") and "holds results made with other settings" in err
+    assert "use another output folder" in err
+    assert {f: f.stat().st_mtime_ns for f in results(out)} == before
+
+
+# ---- case names ----------------------------------------------------------------------------------------
+def test_case_names_cannot_collide():
+    # values that print alike (4 significant digits of psi, 6 of kg) still get their own folders: the
+    # case index comes first
+    g = grid_conditions({"loads_kg": [4625.0, 4625.0000001, 4625.0000002],
+                         "pressures_psi": [120.0, 120.00001, 120.00002]})
+    names = [case_name(i, c) for i, c in enumerate(g)]
+    assert len(g) == 9 and len(set(names)) == 9
+    assert all("/" not in n and n == n.strip() for n in names)
+    assert names[0] == "000_p120psi_l4625kg"
+    # per-pressure experiments (E05, E07, E08): no load in the name
+    p = grid_conditions({}, per_pressure=True)
+    assert [case_name(i, c) for i, c in enumerate(p)] == ["000_p70psi", "001_p120psi", "002_p150psi"]
+
+
+def test_default_grid_is_the_studys():
+    g = grid_conditions({})
+    assert len(g) == 9
+    assert sorted({round(c["pressure_Pa"] / U.PSI, 6) for c in g}) == [70.0, 120.0, 150.0]
+    assert sorted({round(c["load_N"] / U.G0, 6) for c in g}) == [2312.5, 4625.0, 6937.5]
+
+
+@pytest.mark.parametrize("grid, message", [({"loads_kg": [4625.0, 4625.0]}, "sweep.loads_kg: lists a value twice"),
+                                           ({"pressures_psi": [120.0, 300.0]}, "sweep.pressures_psi"),
+                                           ({"speeds": [1.0]}, "sweep.speeds: unknown field")])
+def test_bad_grids_refused(grid, message):
+    with pytest.raises(ConfigError, match=message):
+        grid_conditions(grid)
+
+
+def test_sweep_needs_one_experiment_and_a_sane_batch(tmp_path, capsys):
+    assert main(["sweep", str(REPO / "configs" / "default.toml"), "--out", str(tmp_path / "x")]) == 2
+    assert "exactly one experiment" in capsys.readouterr().err
+    assert main(["sweep", str(FOOTPRINT), "--batch", "-1", "--out", str(tmp_path / "x")]) == 2
+    assert "--batch -1" in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()  # refused before anything was written
+
+
+def test_sweep_grid_reaches_the_config():
+    rc = load_run_config(FOOTPRINT, ["sweep.loads_kg=[2312.5]"])
+    assert grid_conditions(rc.sweep)[0]["load_N"] == pytest.approx(2312.5 * U.G0)
