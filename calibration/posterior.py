@@ -15,12 +15,13 @@ Model, in theta = ln(parameter) (the calibration's ParamSpace):
 The log-probability is vectorized over walkers (emcee's vectorize=True): one emulator call per
 step for the whole ensemble.
 
-Chains are stored in emcee's HDF5 backend (chain.h5), seeded; the run proceeds in chunks of
+Chains are seeded and stored in chain.h5 (emcee's HDF5 layout); the run proceeds in chunks of
 `check_every` steps aligned to multiples of check_every, and after each chunk estimates the
 integrated autocorrelation time tau; it stops when the chain is longer than n_tau x max(tau) (and
-tau is finite), or at max_steps, and then says it did not converge. A killed run resumes from the
-backend (emcee stores the last state and its random state with every step), and reaches the same
-final state as an uninterrupted run with the same seed (tested).
+tau is finite), or at max_steps, and then says it did not converge. Each finished chunk is stored
+at once, atomically (chain.h5.chunks/), chain.h5 atomically at the end: a run killed at any moment
+resumes from its last finished chunk and reaches the same final state, byte for byte in every
+array, as an uninterrupted run with the same seed (tested, including a 10-kill soak).
 """
 
 import dataclasses
@@ -99,59 +100,184 @@ def _tau(chain):
     return emcee.autocorr.integrated_time(chain, tol=0, quiet=True)
 
 
+# ---- storage: atomic chunk files while running, one atomic chain.h5 when the run ends ----------
+# emcee's own HDF5 backend writes each step in place (chain row, acceptance counts, random state,
+# then the step counter) and is not safe to kill: a SIGKILL between those writes left acceptance
+# counts one step ahead of the counter (measured: a 10-kill soak), so the step was redone and
+# counted twice, and a kill during HDF5's metadata flush can leave the file unreadable. Here each
+# chunk of steps is its own file written atomically (jtire.io), and chain.h5 (emcee's layout, so
+# emcee.backends.HDFBackend(path, read_only=True) reads it) is written atomically at the end and
+# is then the resume point; a kill loses at most the chunk in progress, which reruns identically.
+_COMPLETE = "jtire_complete"  # attribute of a chain.h5 written whole by this module
+
+
+def _chunks_dir(path: Path) -> Path:
+    return path.with_name(path.name + ".chunks")
+
+
+def _rs_arrays(random_state) -> dict:
+    name, keys, pos, has_gauss, cached = random_state
+    assert name == "MT19937"
+    return {"rs_keys": np.asarray(keys, np.uint32), "rs_pos": np.int64(pos),
+            "rs_has_gauss": np.int64(has_gauss), "rs_cached": np.float64(cached)}
+
+
+def _rs_tuple(d) -> tuple:
+    return ("MT19937", np.asarray(d["rs_keys"], np.uint32), int(d["rs_pos"]), int(d["rs_has_gauss"]),
+            float(d["rs_cached"]))
+
+
+def _read_h5(path: Path, walkers: int, d: int):
+    """(chain, log_prob, accepted, random_state) of a chain.h5 written by _write_h5."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            g = f["mcmc"]
+            if not g.attrs.get(_COMPLETE, False):
+                raise ConfigError(f"chain {path}: written by an earlier jtire whose chain files were not safe "
+                                  "to kill; use another --out folder (or delete it to start again)")
+            shape = (int(g.attrs["nwalkers"]), int(g.attrs["ndim"]))
+            if shape != (walkers, d):
+                raise ConfigError(f"chain {path}: holds {shape[0]} walkers x {shape[1]} parameters, not "
+                                  f"{walkers} x {d}; use another --out folder")
+            rs = [v for k, v in sorted(g.attrs.items()) if k.startswith("random_state_")]
+            return g["chain"][...], g["log_prob"][...], g["accepted"][...], tuple(rs)
+    except OSError as e:
+        raise ConfigError(f"chain {path}: unreadable ({e}); use another --out folder") from None
+
+
+def _write_h5(path: Path, chain, log_prob, accepted, random_state) -> None:
+    """chain.h5 in emcee's HDFBackend layout, written to a temp file and renamed (atomic)."""
+    import os
+    import tempfile
+
+    import emcee
+    import h5py
+
+    from ..io import current_umask
+
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        with h5py.File(tmp, "w") as f:
+            g = f.create_group("mcmc")
+            g.attrs["version"] = emcee.__version__
+            g.attrs["nwalkers"], g.attrs["ndim"] = chain.shape[1], chain.shape[2]
+            g.attrs["has_blobs"] = False
+            g.attrs["iteration"] = chain.shape[0]
+            for i, v in enumerate(random_state):
+                g.attrs[f"random_state_{i}"] = v
+            g.create_dataset("accepted", data=accepted)
+            g.create_dataset("chain", data=chain, maxshape=(None, *chain.shape[1:]))
+            g.create_dataset("log_prob", data=log_prob, maxshape=(None, chain.shape[1]))
+            g.attrs[_COMPLETE] = True
+        os.chmod(tmp, 0o666 & ~current_umask())
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _write_chunk(folder: Path, start: int, chain, log_prob, accepted, random_state) -> None:
+    import io
+
+    from ..io import atomic_write_bytes
+
+    buf = io.BytesIO()
+    np.savez(buf, start=np.int64(start), chain=chain, log_prob=log_prob, accepted=accepted,
+             **_rs_arrays(random_state))
+    atomic_write_bytes(folder / f"{start:010d}.npz", buf.getvalue())
+
+
+def _load(path: Path, walkers: int, d: int):
+    """The stored chain: chain.h5 (if any) then the chunks that continue it, in order.
+    Returns (chain (n, walkers, d), log_prob (n, walkers), accepted (walkers,), random state or
+    None for an empty chain)."""
+    chain = np.zeros((0, walkers, d))
+    log_prob = np.zeros((0, walkers))
+    accepted = np.zeros(walkers)
+    rs = None
+    if path.exists():
+        chain, log_prob, accepted, rs = _read_h5(path, walkers, d)
+    folder = _chunks_dir(path)
+    for f in sorted(folder.glob("*.npz")) if folder.is_dir() else ():
+        try:
+            with np.load(f) as z:
+                c = {k: z[k] for k in z.files}
+        except (OSError, ValueError, EOFError) as e:
+            raise ConfigError(f"chain chunk {f}: unreadable ({e}); use another --out folder") from None
+        start = int(c["start"])
+        if start < chain.shape[0]:
+            continue  # already in chain.h5 (killed after writing it, before removing the chunks)
+        if start != chain.shape[0] or c["chain"].shape[1:] != (walkers, d):
+            raise ConfigError(f"chain chunk {f}: does not continue the stored chain of {chain.shape[0]} steps "
+                              f"x {walkers} walkers x {d} parameters; use another --out folder")
+        chain = np.concatenate([chain, c["chain"]])
+        log_prob = np.concatenate([log_prob, c["log_prob"]])
+        accepted = accepted + c["accepted"]
+        rs = _rs_tuple(c)
+    return chain, log_prob, accepted, rs
+
+
 def run_sampler(log_prob, p0, path, walkers: int, max_steps: int, check_every: int = 500,
                 n_tau: float = 50.0, seed: int = 0, progress=None) -> SamplerResult:
-    """Run (or resume) an emcee EnsembleSampler stored in the HDF5 file `path`.
+    """Run (or resume) an emcee EnsembleSampler whose chain is stored at `path` (chain.h5).
 
     log_prob: vectorized, thetas (walkers, d) -> (walkers,); p0: (walkers, d) start (used only
-    for a new chain). Steps run in chunks ending on multiples of check_every, so a resumed run
-    checks convergence at the same steps as an uninterrupted one.
-    progress: optional callable(steps, tau) after each chunk.
+    for a new chain). Steps run in chunks ending on multiples of check_every; each chunk starts a
+    sampler from the stored state (positions, log-probabilities, random state), in a fresh run and
+    a resumed one alike, so a resumed chain is the uninterrupted one. Each finished chunk is stored
+    at once (atomically) in path + ".chunks/"; at the end chain.h5 is written whole and the chunks
+    removed. progress: optional callable(steps, tau) after each chunk.
     """
+    import shutil
+
     import emcee
+    from emcee.state import State
 
     p0 = np.asarray(p0, float)
     d = p0.shape[1]
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    backend = emcee.backends.HDFBackend(str(path))
-    fresh = not path.exists() or backend.iteration == 0
-    if fresh:
-        backend.reset(walkers, d)
-    elif backend.shape != (walkers, d):
-        raise ConfigError(f"chain {path}: holds {backend.shape[0]} walkers x {backend.shape[1]} "
-                          f"parameters, not {walkers} x {d}; use another --out folder")
-    sampler = emcee.EnsembleSampler(walkers, d, log_prob, vectorize=True, backend=backend)
-    state = None
-    if fresh:
-        sampler.random_state = np.random.RandomState(int(seed)).get_state()
-        state = p0
+    chain, lp, accepted, rs = _load(path, walkers, d)
+    start = it = chain.shape[0]
+    if rs is None:  # a new chain
         lp0 = log_prob(p0)
         if not np.all(np.isfinite(lp0)):
             raise ConfigError(f"sampler start: {int(np.sum(~np.isfinite(lp0)))} walkers start "
                               "where the posterior is zero (outside the bounds?)")
-    start = backend.iteration
+        state = State(p0, random_state=np.random.RandomState(int(seed)).get_state())
+    else:
+        state = State(chain[-1], log_prob=lp[-1], random_state=rs)
     tau = np.full(d, np.nan)
     converged = False
-    it = start
     if it >= check_every and it % check_every == 0:  # resumed exactly on a check: redo it
-        tau = _tau(backend.get_chain())
+        tau = _tau(chain)
         converged = bool(np.all(np.isfinite(tau)) and it > n_tau * np.max(tau))
+    folder = _chunks_dir(path)
     while it < max_steps and not converged:
         n = min(check_every - it % check_every, max_steps - it)
-        sampler.run_mcmc(state, n, progress=False)
-        state = None
-        it = backend.iteration
-        tau = _tau(backend.get_chain())
+        sampler = emcee.EnsembleSampler(walkers, d, log_prob, vectorize=True)
+        state = sampler.run_mcmc(state, n, progress=False)
+        c, l, a = sampler.get_chain(), sampler.get_log_prob(), sampler.backend.accepted
+        _write_chunk(folder, it, c, l, a, state.random_state)
+        chain, lp, accepted = np.concatenate([chain, c]), np.concatenate([lp, l]), accepted + a
+        it = chain.shape[0]
+        tau = _tau(chain)
         converged = bool(np.all(np.isfinite(tau)) and it > n_tau * np.max(tau))
         if progress is not None:
             progress(it, tau)
-    chain = backend.get_chain()
+    if it > start or not path.exists():
+        _write_h5(path, chain, lp, accepted, state.random_state)
+    shutil.rmtree(folder, ignore_errors=True)
     if not np.all(np.isfinite(tau)) and chain.shape[0] > 0:
         tau = _tau(chain)
-    acc = backend.accepted / max(backend.iteration, 1)
-    return SamplerResult(chain, backend.get_log_prob(), tau, converged, acc, int(backend.iteration),
-                         int(backend.iteration - start), float(n_tau))
+    acc = accepted / max(it, 1)
+    return SamplerResult(chain, lp, tau, converged, acc, int(it), int(it - start), float(n_tau))
 
 
 def diagnostics(res: SamplerResult) -> dict:

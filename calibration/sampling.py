@@ -2,7 +2,8 @@
 
 Output folder: fingerprint.json (the posterior config, the calibration's fingerprint and a hash
 of the emulator's training runs: a rerun with other settings refuses), chain.h5 (emcee's HDF5
-backend; rerun to resume), emulator.json (LOO errors of every candidate, the choice),
+layout, written whole when the chain stops; while it runs, chain.h5.chunks/ holds each finished
+chunk: a killed run resumes from it when rerun), emulator.json (LOO errors of every candidate, the choice),
 diagnostics.json, predictive.csv/.md, widths.csv, corner.png, check.json (simulator check).
 """
 

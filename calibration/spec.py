@@ -125,8 +125,12 @@ def load_calibration(path, overrides=(), data_dir=None) -> CalibrationSpec:
     if not isinstance(raw.get("tire_file"), str):
         raise ConfigError("tire_file: missing (path of the tire TOML, relative to this config)")
     tire_path = (path.parent / raw["tire_file"]).resolve()
-    tire_raw = apply_overrides(load_toml(tire_path), [o[5:] for o in overrides if o.startswith("tire.")])
-    tire = tire_from_dict(tire_raw)
+    tire_raw = apply_overrides(load_toml(tire_path, "tire file"),
+                               [o[5:] for o in overrides if o.startswith("tire.")])
+    try:
+        tire = tire_from_dict(tire_raw)
+    except ConfigError as e:  # named as `--set tire.<field>` would name it, with the file
+        raise ConfigError(f"tire file {tire_path.name}: tire.{e}") from None
     base = params_from_spec(tire)
     method = raw.get("method", "arsm")
     if method not in METHODS:

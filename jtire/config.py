@@ -138,6 +138,46 @@ class TireSpec:
     reference: dict
 
 
+def _check_geometry(g: Geometry) -> None:
+    """Cross-field checks of the section: refuse what `jtire.mesh.section_profile` cannot build,
+    or would build as something else than the file says, each as one line naming the field and
+    its allowed range (mm, from the other fields). The mesh's rules: the sidewall leaves the rim at
+    rim_radius + flange_height and is widest at mid-height; the crown is an arc of transverse radius
+    crown_radius across the belt (a parabola r = r_belt - y^2 / (2 R)); the tread sits on the part of
+    the section above 3/4 of its height, over tread_width (tapering to zero over 30 mm)."""
+    mm_ = 1e3
+    if abs(g.outer_radius - g.rim_radius - g.section_height) > 0.02:
+        raise ConfigError(f"tire.section_height_mm = {g.section_height * mm_:g}: must equal (outer_diameter_mm - "
+                          f"rim_diameter_mm) / 2 = {(g.outer_radius - g.rim_radius) * mm_:g} within 20 mm")
+    if not g.flange_height < 0.5 * g.section_height:
+        raise ConfigError(f"tire.flange_height_mm = {g.flange_height * mm_:g}: must be below half the section height, "
+                          f"{0.5 * g.section_height * mm_:g} mm (the sidewall is widest at mid-height)")
+    if not g.rim_width < g.section_width:
+        raise ConfigError(f"tire.rim_width_mm = {g.rim_width * mm_:g}: must be below tire.section_width_mm = "
+                          f"{g.section_width * mm_:g}")
+    if not g.rim_width < g.belt_width < g.section_width:
+        raise ConfigError(f"tire.belt_width_mm = {g.belt_width * mm_:g}: must lie between tire.rim_width_mm = "
+                          f"{g.rim_width * mm_:g} and tire.section_width_mm = {g.section_width * mm_:g}")
+    if not g.belt_width <= g.tread_width <= g.section_width:
+        # the tread covers the belt (the road touches the crown only through the tread) and lies on
+        # the crown: a wider tread than the section would change nothing in the mesh
+        raise ConfigError(f"tire.tread_width_mm = {g.tread_width * mm_:g}: must be in [tire.belt_width_mm = "
+                          f"{g.belt_width * mm_:g}, tire.section_width_mm = {g.section_width * mm_:g}] (the tread "
+                          "covers the belt and lies on the crown)")
+    # the crown's room: from the belt's centre line down to the lowest point that carries tread
+    room = g.outer_radius - g.rim_radius - 0.75 * g.section_height
+    if not g.tread_depth < room:
+        raise ConfigError(f"tire.tread_depth_mm = {g.tread_depth * mm_:g}: must be below {room * mm_:.4g} mm (the "
+                          "belt must lie in the upper quarter of the section height, where the mesh puts the tread)")
+    hb = 0.5 * g.belt_width
+    r_min = max(hb, hb**2 / (2.0 * (room - g.tread_depth)))
+    if not g.crown_radius > r_min:
+        raise ConfigError(f"tire.crown_radius_mm = {g.crown_radius * mm_:g}: must be above {r_min * mm_:.4g} mm for "
+                          f"this belt (half-width {hb * mm_:g} mm) and tread depth: a crown arc across the belt needs "
+                          "a radius above its half-width, and must not drop the belt edge below the tread zone "
+                          f"(room {(room - g.tread_depth) * mm_:.3g} mm)")
+
+
 def tire_from_dict(raw: dict) -> TireSpec:
     v = validate(raw, TIRE_SCHEMA)
     t = v["tire"]
@@ -147,10 +187,7 @@ def tire_from_dict(raw: dict) -> TireSpec:
         outer_radius=t["outer_diameter_mm"] / 2, tread_depth=t["tread_depth_mm"], tread_width=t["tread_width_mm"],
         belt_width=t["belt_width_mm"], crown_radius=t["crown_radius_mm"],
     )
-    if abs(geometry.outer_radius - geometry.rim_radius - geometry.section_height) > 0.02:
-        raise ConfigError("tire.section_height_mm: must equal (outer_diameter_mm - rim_diameter_mm) / 2 within 20 mm")
-    if not geometry.rim_width < geometry.belt_width < geometry.section_width:
-        raise ConfigError("tire.belt_width_mm: must lie between tire.rim_width_mm and tire.section_width_mm")
+    _check_geometry(geometry)
     m = v["mass"]
     if m["belt_kg"] >= m["tire_kg"]:
         raise ConfigError(f"mass.belt_kg = {m['belt_kg']:g}: must be below mass.tire_kg = {m['tire_kg']:g}")

@@ -88,27 +88,72 @@ class RunTable:
 
 
 def _read_table(path: Path, columns: tuple) -> list:
-    if not path.is_file():
+    """Rows of a measurement CSV as dicts (column -> text), each with its file line number under
+    the key "_line". Comment lines ('#') and blank lines are skipped. Every problem is one
+    ConfigError naming the file (and the line): missing, a folder, not UTF-8, no header, a
+    duplicated or missing column, a row with another number of fields than the header, no rows.
+    """
+    from .config import read_text
+
+    if not path.exists():
         raise ConfigError(f"data file {path}: not found (pass --data-dir to point elsewhere)")
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(line for line in f if line.strip() and not line.startswith("#")))
-    if not rows:
-        raise ConfigError(f"data file {path}: no data rows")
-    missing = [c for c in columns if c not in rows[0]]
+    text = read_text(path, "data file")
+    numbered = [(i + 1, line) for i, line in enumerate(text.splitlines())
+                if line.strip() and not line.lstrip().startswith("#")]
+    if not numbered:
+        raise ConfigError(f"data file {path}: empty (no header line, no data rows)")
+    parsed = []
+    for line_no, line in numbered:  # one record per line (so every error can name its line)
+        try:
+            parsed.append(next(csv.reader([line], strict=True)))
+        except csv.Error as e:
+            raise ConfigError(f"data file {path} line {line_no}: not valid CSV ({e})") from None
+    header = [h.strip() for h in parsed[0]]
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise ConfigError(f"data file {path} line {numbered[0][0]}: column(s) {dup} appear more than once")
+    missing = [c for c in columns if c not in header]
     if missing:
         raise ConfigError(f"data file {path}: missing column(s) {missing}; need {list(columns)}")
+    rows = []
+    for (line_no, _), fields in zip(numbered[1:], parsed[1:]):
+        if len(fields) != len(header):
+            raise ConfigError(f"data file {path} line {line_no}: {len(fields)} fields, the header has "
+                              f"{len(header)}")
+        rows.append(dict(zip(header, (f.strip() for f in fields))) | {"_line": line_no})
+    if not rows:
+        raise ConfigError(f"data file {path}: no data rows (only the header)")
     return rows
 
 
 def _column(rows, name, path, positive=False) -> np.ndarray:
-    try:
-        v = np.array([float(r[name]) for r in rows])
-    except (TypeError, ValueError):
-        raise ConfigError(f"{path.name} column {name}: every entry must be a number") from None
-    if not np.all(np.isfinite(v)) or (positive and np.any(v <= 0.0)):
-        raise ConfigError(f"{path.name} column {name}: must be finite"
-                          + (" and > 0" if positive else ""))
-    return v
+    """Column `name` as floats (n,); a non-number, NaN or inf (or <= 0 with positive) names the
+    file and the line."""
+    out = []
+    for r in rows:
+        try:
+            v = float(r[name])
+        except ValueError:
+            raise ConfigError(f"data file {path} line {r['_line']}: {name} = {r[name]!r}: must be a "
+                              "number") from None
+        if not np.isfinite(v) or (positive and v <= 0.0):
+            raise ConfigError(f"data file {path} line {r['_line']}: {name} = {r[name]}: must be finite"
+                              + (" and > 0" if positive else ""))
+        out.append(v)
+    return np.array(out, dtype=float)
+
+
+def _check_configurations(table, path) -> None:
+    """Runs of one configuration (and axle) must share its label, pressure and nominal load: the
+    averages take them from the first run, so a mismatch would be reported under a wrong name."""
+    for cfg, axle in dict.fromkeys(zip(table.config.tolist(), table.axle.tolist())):
+        m = (table.config == cfg) & (table.axle == axle)
+        for what, col in (("label", table.label), ("pressure_psi", table.pressure_pa),
+                          ("nominal_load_lbs", table.nominal_load_n)):
+            if len(set(col[m].tolist())) > 1:
+                raise ConfigError(f"data file {path}: configuration {cfg}"
+                                  + (f" axle {axle}" if table.source != "track" else "")
+                                  + f" has runs with different {what}")
 
 
 def _load(source: str, filename: str, data_dir, axle_column) -> RunTable:
@@ -117,10 +162,15 @@ def _load(source: str, filename: str, data_dir, axle_column) -> RunTable:
     rows = _read_table(path, cols + ((axle_column,) if axle_column else ()))
     n = len(rows)
     axle = np.array([r[axle_column] for r in rows]) if axle_column else np.full(n, "pusher")
+    config = _column(rows, "config", path)
+    bad = [r for r, c in zip(rows, config) if c != int(c)]
+    if bad:
+        raise ConfigError(f"data file {path} line {bad[0]['_line']}: config = {bad[0]['config']!r}: "
+                          "must be an integer")
     # The single unit conversion of the measured data: lbf -> N, psi -> Pa.
-    return RunTable(
+    table = RunTable(
         source=source,
-        config=_column(rows, "config", path).astype(int),
+        config=config.astype(int),
         label=np.array([r["label"] for r in rows]),
         axle=axle,
         run=np.array([r["run"] for r in rows]),
@@ -130,6 +180,8 @@ def _load(source: str, filename: str, data_dir, axle_column) -> RunTable:
         fz_n=_column(rows, "fz_lbs", path, positive=True) * LBF_N,
         rrc_table=_column(rows, "rrc", path),
     )
+    _check_configurations(table, path)
+    return table
 
 
 def load_track(data_dir=None) -> RunTable:
@@ -209,10 +261,25 @@ def trend_fits(table: RunTable, name: str, pressure_psi=None, axle=None,
 
 def points_trend_fits(name: str, description: str, fz_n, rrc,
                       confidence: float = 0.95) -> TrendFits:
-    """Fit both trends to given points, fz_n (N) and rrc of shape (n,)."""
+    """Fit both trends to given points, fz_n (N) and rrc of shape (n,). A fit that cannot be
+    made (too few points, an exact fit, RRC <= 0 for the power law) is one ConfigError naming
+    the fit and its points (e.g. ``fit track_120psi (track, 120 psi, ...): ...``)."""
     fz_n, rrc = np.asarray(fz_n, dtype=float), np.asarray(rrc, dtype=float)
-    return TrendFits(name, description, fz_n, rrc, fit_linear(fz_n, rrc, confidence),
-                     fit_power(fz_n, rrc, confidence))
+    try:
+        fits = TrendFits(name, description, fz_n, rrc, fit_linear(fz_n, rrc, confidence),
+                         fit_power(fz_n, rrc, confidence))
+    except ConfigError as e:
+        raise ConfigError(f"fit {name} ({description}): {e}") from None
+    # Measured runs never lie on a trend to round-off; if these do (synthetic data, or an RRC
+    # column computed from the fit), the residual sd is 0, the intervals have zero width and every
+    # z-score is infinite: a certainty no measurement has. Refuse, naming the fit, rather than
+    # print those numbers.
+    for model, line in (("linear", fits.linear.line), ("power-law", fits.power.log_line)):
+        if line.exact:
+            raise ConfigError(f"fit {name} ({description}): the {line.n} points lie exactly on the "
+                              f"{model} trend (residual sd 0 to round-off): no confidence interval "
+                              "can be estimated; measured runs scatter, check the data")
+    return fits
 
 
 @dataclasses.dataclass(frozen=True)

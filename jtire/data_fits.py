@@ -22,7 +22,6 @@ places them against a fit.
 
 import dataclasses
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -58,7 +57,9 @@ class OLSLine:
     """y = p0 + p1 x fitted by ordinary least squares.
 
     params: (2,) [intercept, slope]; cov: (2, 2) parameter covariance; sigma: residual standard
-    deviation; n: number of points; confidence: two-sided level of every interval (e.g. 0.95).
+    deviation; n: number of points; confidence: two-sided level of every interval (e.g. 0.95);
+    exact: the points lie on the line to round-off (sigma ~ 0: the parameters are right, but
+    every interval has zero width -- `jtire.data` refuses to report such a fit).
     """
 
     params: np.ndarray
@@ -66,6 +67,7 @@ class OLSLine:
     sigma: float
     n: int
     confidence: float
+    exact: bool = False
 
     @property
     def dof(self) -> int:
@@ -101,9 +103,11 @@ def fit_ols_line(x, y, confidence: float = 0.95) -> OLSLine:
     x = np.asarray(x, dtype=float).ravel()
     y = np.asarray(y, dtype=float).ravel()
     if not 0.0 < confidence < 1.0:
-        raise ConfigError(f"confidence = {confidence}: must be in (0, 1)")
-    if x.shape != y.shape or x.size < 3:
-        raise ConfigError(f"fit points = {x.size} x / {y.size} y: need equal counts, at least 3")
+        raise ConfigError(f"confidence = {confidence}: must be in (0, 1), e.g. 0.95")
+    if x.shape != y.shape:
+        raise ConfigError(f"{x.size} x values and {y.size} y values: need one y per x")
+    if x.size < 3:
+        raise ConfigError(f"{x.size} points: a fit with confidence intervals needs at least 3")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
         raise ConfigError("fit points: must be finite (got NaN or inf)")
     if np.ptp(x) == 0.0:
@@ -114,13 +118,17 @@ def fit_ols_line(x, y, confidence: float = 0.95) -> OLSLine:
     q, r = np.linalg.qr(design)
     beta_c = np.linalg.solve(r, q.T @ y)
     resid = y - design @ beta_c
-    sigma2 = float(resid @ resid) / (x.size - 2)
+    ss = float(resid @ resid)
+    # Points on the line to round-off (far below the 6 printed digits of measured data): the
+    # parameters are right, but the residual sd estimate is 0, so every interval has zero width.
+    exact = ss <= x.size * (1e-10 * float(np.max(np.abs(y)))) ** 2
+    sigma2 = ss / (x.size - 2)
     r_inv = np.linalg.inv(r)
     cov_c = sigma2 * (r_inv @ r_inv.T)
     # Back to the uncentred parameters: [p0, p1] = T [b0, b1] with p0 = b0 - x0 b1.
     t = np.array([[1.0, -x0], [0.0, 1.0]])
     return OLSLine(params=t @ beta_c, cov=t @ cov_c @ t.T, sigma=math.sqrt(sigma2),
-                   n=int(x.size), confidence=float(confidence))
+                   n=int(x.size), confidence=float(confidence), exact=bool(exact))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -225,33 +233,47 @@ class Target:
         return self.force_n / self.load_n
 
 
+def _positive(table: dict, key: str, where: str, hi: float) -> float:
+    v = table.get(key)
+    if not (isinstance(v, (int, float)) and not isinstance(v, bool)):
+        raise ConfigError(f"{where}.{key} = {v!r}: must be a number in (0, {hi:g}]")
+    if not 0.0 < v <= hi:  # NaN fails here too
+        raise ConfigError(f"{where}.{key} = {v!r}: must be in (0, {hi:g}]")
+    return float(v)
+
+
 def load_targets(reference=None) -> list:
     """Read [calibration.targets.rolling_resistance_*] from the reference TOML.
 
     The load is taken from `vertical_load_kN` (the study's 38.7 / 41.4 kN, from which it quotes
     RRC 0.0395 / 0.0411), not from the rounder `vertical_load_lbs` (9300 lbf is 41.37 kN).
+    Each table needs vertical_load_kN in (0, 500] and force_N > 0 below the load (RRC < 1);
+    anything else is one ConfigError naming the file and the field.
     """
+    from .config import read_toml
+
     path = Path(reference) if reference is not None else DEFAULT_REFERENCE
-    if not path.is_file():
-        raise ConfigError(f"reference = {path}: file not found (expected a TOML with "
-                          "[calibration.targets.rolling_resistance_*])")
-    with open(path, "rb") as f:
-        doc = tomllib.load(f)
-    tables = doc.get("calibration", {}).get("targets", {})
+    doc = read_toml(path, "reference file")
+    cal = doc.get("calibration", {})
+    tables = cal.get("targets", {}) if isinstance(cal, dict) else None
+    if not isinstance(tables, dict):
+        raise ConfigError(f"{path}: calibration.targets must be a table of "
+                          "[calibration.targets.rolling_resistance_*] tables")
     out = []
     for name in sorted(k for k in tables if k.startswith("rolling_resistance")):
-        t = tables[name]
-        try:
-            load_n = float(t["vertical_load_kN"]) * 1e3
-            force_n = float(t["force_N"])
-        except (KeyError, TypeError, ValueError):
-            raise ConfigError(f"calibration.targets.{name}: needs numeric vertical_load_kN "
-                              "and force_N") from None
-        if not (load_n > 0.0 and force_n > 0.0):
-            raise ConfigError(f"calibration.targets.{name}: load and force must be > 0")
+        t, where = tables[name], f"{path.name}: calibration.targets.{name}"
+        if not isinstance(t, dict):
+            raise ConfigError(f"{where}: must be a table with vertical_load_kN and force_N")
+        load_n = _positive(t, "vertical_load_kN", where, 500.0) * 1e3
+        force_n = _positive(t, "force_N", where, 1e6)
+        if force_n >= load_n:
+            raise ConfigError(f"{where}.force_N = {force_n:g}: must be below the vertical load "
+                              f"{load_n:g} N (a rolling-resistance coefficient below 1)")
+        if "vertical_load_lbs" in t:
+            _positive(t, "vertical_load_lbs", where, 1.2e5)
         out.append(Target(name, load_n, force_n))
     if not out:
-        raise ConfigError(f"calibration.targets.rolling_resistance_* in {path}: none found")
+        raise ConfigError(f"{path}: no [calibration.targets.rolling_resistance_*] tables")
     return out
 
 
@@ -287,6 +309,10 @@ class TargetComparison:
 
 def compare_target(fit, target: Target, dataset: str = "") -> TargetComparison:
     """Place one target against a LinearFit or PowerFit (`dataset` only labels the result)."""
+    line = fit.log_line if isinstance(fit, PowerFit) else fit.line
+    if line.exact:
+        raise ConfigError(f"{dataset or 'fit'}: its {line.n} points lie exactly on the trend (residual "
+                          "sd 0): no band to compare a target with; measured runs scatter, check the data")
     p = fit.predict(target.load_n)
     pred = float(p.mean[0])
     if isinstance(fit, PowerFit):

@@ -128,7 +128,7 @@ def test_cli_quick_standin(tmp_path, capsys):
     assert "ARSM" in printed and "0.18 % in 24 calls" in printed
     assert (tmp_path / "standin" / "progression.png").exists()
     assert main(["compete", str(tmp_path / "no.toml")]) == 2
-    assert "file not found" in capsys.readouterr().err
+    assert "no such competition config" in capsys.readouterr().err
     # --set overrides a config field, and a bad value is a one-line error naming it
     assert main(["compete", str(CONFIG), "--set", "bounds.density_kg_m3=[2200.0, 1200.0]",
                  "--out", str(tmp_path)]) == 2

@@ -88,6 +88,24 @@ def test_linear_fit_recovers_known_line_exactly():
     assert fit.a == pytest.approx(a, rel=EXACT)
     assert fit.b == pytest.approx(b, rel=EXACT)
     assert fit.line.sigma < 1e-12  # no residual on an exact line
+    assert fit.line.exact  # ... and flagged: its intervals have zero width
+
+
+def test_exact_fit_is_refused_by_the_analysis_not_reported(tmp_path):
+    # Points on a line to round-off give zero-width intervals and infinite z-scores; the analysis
+    # refuses them (one line naming the fit) instead of printing a certainty no data has.
+    from jtire.data import points_trend_fits
+    from jtire.data_fits import Target
+
+    fz = np.linspace(30e3, 45e3, 6)
+    with pytest.raises(ConfigError, match=r"fit exact \(test\): the 6 points lie exactly on the linear"):
+        points_trend_fits("exact", "test", fz, 0.01 + 1e-7 * fz)
+    fit = fit_linear(fz, 0.01 + 1e-7 * fz)
+    with pytest.raises(ConfigError, match="lie exactly on the trend"):
+        compare_target(fit, Target("t", 40e3, 800.0), "exact")
+    # one part in 1e6 of scatter (the 6 printed digits of the tables) is data, not an exact fit
+    noisy = (0.01 + 1e-7 * fz) * (1 + 1e-6 * np.array([1, -1, 1, 1, -1, -1]))
+    assert not points_trend_fits("noisy", "test", fz, noisy).linear.line.exact
 
 
 def test_power_fit_recovers_known_law_exactly():

@@ -47,8 +47,15 @@ def _say(text: str = "", err: bool = False) -> None:
     print(text, file=sys.stderr if err else sys.stdout, flush=True)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the house error format: one line on stderr (no usage block), exit code 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser():
-    parser = argparse.ArgumentParser(prog="jtire", description=__doc__.splitlines()[0])
+    parser = _Parser(prog="jtire", description=__doc__.splitlines()[0])
     parser.add_argument("--no-cache", action="store_true",
                         help="do not use the persistent compilation cache (default: on, in the user's cache folder; "
                              "JTIRE_CACHE_DIR sets the folder)")

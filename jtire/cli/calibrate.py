@@ -33,7 +33,7 @@ def simulator_for(spec, standin: bool, say):
     from ..calibration.standin import StandinSimulator
 
     if standin:
-        say("simulator: closed-form STAND-IN (not physics)", err=True)
+        say("simulator: closed-form STAND-IN (not physics)")
         return StandinSimulator(spec.space, spec.base_params, spec.targets)
     try:
         return make_simulator(spec, spec.tire)
@@ -48,14 +48,17 @@ def run_cli(args, say) -> int:
     from ..calibration.tire_calibration import run_calibration
     from ..errors import ConfigError
 
+    from ..io import check_writable
+
     spec = load_calibration(args.config, args.set)
     if args.budget is not None and not args.budget >= 1:
         raise ConfigError(f"--budget = {args.budget:g}: must be >= 1")
+    out = Path(args.out) if args.out else Path("runs") / "calibrate" / (
+        Path(args.config).stem + ("_standin" if args.standin else ""))
+    check_writable(out)
     sim = simulator_for(spec, args.standin, say)
     if sim is None:
         return 2
-    out = Path(args.out) if args.out else Path("runs") / "calibrate" / (
-        Path(args.config).stem + ("_standin" if args.standin else ""))
 
     def progress(res):
         say(f"  {res.n_evaluations} evaluations, best total error {res.total_error_pct:.4g} %",

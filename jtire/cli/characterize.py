@@ -38,15 +38,22 @@ def run_cli(args, say) -> int:
     if done:
         say(f"resuming: {done} of {total} cases already done in {out}", err=True)
     failures, walls = [], {}
-    bar = tqdm(total=total, initial=done, desc="characterize", unit="case")
+    bars = []  # the progress bar starts with the first finished case: an error found before any
+    # case (an unwritable or foreign --out) is then the only line on stderr
+
+    def progress(n):
+        if not bars:
+            bars.append(tqdm(total=total, initial=done, desc="characterize", unit="case"))
+        bars[0].update(n)
 
     def on_case(name, cond, err):
         if err is not None:
             failures.append(f"{name}: {err}")
 
     t0 = time.perf_counter()
-    results = ch.run(plan, out, batch_size=args.batch, progress=bar.update, on_case=on_case)
-    bar.close()
+    results = ch.run(plan, out, batch_size=args.batch, progress=progress, on_case=on_case)
+    for bar in bars:
+        bar.close()
     walls["total_s"] = time.perf_counter() - t0
     char = ch.characterization(plan, out, results)
     write_characterization(out, char)

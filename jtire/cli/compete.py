@@ -27,20 +27,31 @@ def add_arguments(parser):
 
 def run_cli(args, say) -> int:
     from ..config import apply_overrides
+    from ..errors import ConfigError
+    from ..io import check_writable
 
     cfg = apply_overrides(load_config(args.config), args.set)
-    comp = dict(cfg.get("competition", {}))
+    comp = cfg.get("competition", {})
+    if not isinstance(comp, dict):
+        raise ConfigError("competition: must be a table")
+    comp = dict(comp)
     if args.quick:
         comp.update(seeds=QUICK_SEEDS, budget=QUICK_BUDGET)
+    for flag, value, lo, hi in (("--seeds", args.seeds, 1, 10000), ("--budget", args.budget, 5, 100000)):
+        if value is not None and not lo <= value <= hi:
+            raise ConfigError(f"{flag} {value}: must be in [{lo}, {hi}]")
     if args.seeds is not None:
         comp["seeds"] = args.seeds
     if args.budget is not None:
         comp["budget"] = args.budget
-    if args.methods:
+    if args.methods is not None:
         comp["methods"] = [m.strip() for m in args.methods.split(",") if m.strip()]
+        if not comp["methods"]:
+            raise ConfigError(f"--methods {args.methods!r}: name at least one method, e.g. arsm,ga")
     spec = CompetitionSpec.from_config({**cfg, "competition": comp})
     objective = (soil_objective if args.objective == "soil" else standin_objective)(cfg)
     out = Path(args.out) / args.objective
+    check_writable(out)
     results = run_competition(objective, spec, out, fingerprint=fingerprint(cfg, args.objective))
     what = ("soil plate test (FE)" if args.objective == "soil"
             else "CLOSED-FORM STAND-IN objective, not the soil FE model")

@@ -6,6 +6,8 @@ from pathlib import Path
 
 from ..data import LBF_N, PSI_PA, RRC_SOURCES, SANDBOX_FILE, TRACK_FILE, analyze
 from ..errors import ConfigError
+
+
 def add_arguments(parser) -> None:
     parser.add_argument("--out", default="runs/data", help="output folder (default runs/data)")
     parser.add_argument("--data-dir", default=None,
@@ -60,12 +62,13 @@ def _interval(lo, hi) -> str:
 
 
 def run_cli(args, say) -> int:
-    from ..io import atomic_write_csv, atomic_write_json
+    from ..io import atomic_write_csv, atomic_write_json, check_writable
 
-    if not 0.0 < args.confidence < 1.0:
-        raise ConfigError(f"--confidence = {args.confidence}: must be in (0, 1)")
-    s = analyze(args.data_dir, args.reference, args.rrc, args.confidence)
+    if not 0.0 < args.confidence < 1.0:  # NaN and inf fail too
+        raise ConfigError(f"--confidence {args.confidence:g}: must be in (0, 1), e.g. 0.95")
     out = Path(args.out)
+    check_writable(out)
+    s = analyze(args.data_dir, args.reference, args.rrc, args.confidence)
     pct = f"{100 * args.confidence:g}%"
 
     _print_averages(say, "Track (rigid oval, 15 mph), per-configuration averages", s.track_averages)

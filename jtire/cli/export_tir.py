@@ -15,13 +15,22 @@ def add_arguments(parser) -> None:
 
 
 def run_cli(args, say) -> int:
+    import math
+
+    from ..errors import ConfigError
+    from ..io import check_writable
     from ..rigid_ring.export import export
     from ..rigid_ring.table import read_characterization
 
+    if not (math.isfinite(args.longvl) and 0.0 < args.longvl <= 100.0):
+        raise ConfigError(f"--longvl {args.longvl:g}: must be a speed in (0, 100] m/s")
     src = Path(args.characterization)
     char = read_characterization(src)
     base = src if src.is_dir() else src.parent
     out = Path(args.out) if args.out else base / "rigid_ring.tir"
+    if out.is_dir():
+        raise ConfigError(f"--out {out}: is a folder; give the .tir file to write")
+    check_writable(out.parent)
     written, lines = export(char, out.parent, tir_name=out.name, longvl=args.longvl, fittyp=args.fittyp,
                             all_pressures=args.all_pressures, source=src.name)
     for line in lines:

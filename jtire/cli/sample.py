@@ -40,6 +40,9 @@ def run_cli(args, say) -> int:
         if sim is None:
             return 2
     out = Path(args.out) if args.out else Path("runs") / "sample" / Path(args.config).stem
+    from ..io import check_writable
+
+    check_writable(out)
 
     def progress(steps, tau):
         t = f"{np.max(tau):.1f}" if np.all(np.isfinite(tau)) else "n/a"

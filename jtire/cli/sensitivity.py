@@ -44,12 +44,25 @@ def run_cli(args, say) -> int:
         if not path.is_file():
             raise ConfigError(f"--at {args.at}: no summary.json there (a `jtire calibrate` output "
                               "folder, or base)")
-        theta = np.array(json.loads(path.read_text())["theta"], float)
+        from ..config import read_text
+
+        text = read_text(path, "calibration summary")
+        try:
+            theta = np.array(json.loads(text)["theta"], float)
+        except (ValueError, KeyError, TypeError):  # not JSON, no theta, not numbers
+            raise ConfigError(f"--at {args.at}: {path.name} holds no best point (theta: a list of "
+                              "numbers); is it a `jtire calibrate` output folder?") from None
         if theta.shape != (spec.space.d,) or not np.all(np.isfinite(theta)):
             raise ConfigError(f"--at {args.at}: its best point does not fit this config's "
                               f"{spec.space.d} free parameters")
     quantities = (tuple(q.strip() for q in args.quantities.split(",") if q.strip())
                   if args.quantities else spec.sensitivity_quantities)
+    if not quantities:
+        raise ConfigError(f"--quantities {args.quantities!r}: name at least one quantity")
+    from ..io import check_writable
+
+    out = Path(args.out) if args.out else Path("runs") / "sensitivity" / Path(args.config).stem
+    check_writable(out)
     sim = simulator_for(spec, args.standin, say)
     if sim is None:
         return 2
@@ -62,7 +75,6 @@ def run_cli(args, say) -> int:
     except KeyError as e:
         raise ConfigError(f"--quantities: {e.args[0]}") from None
     ident = identifiability(targets.elasticity, spec.weights, args.rel_tol)
-    out = Path(args.out) if args.out else Path("runs") / "sensitivity" / Path(args.config).stem
     paths = write_sensitivity(sens, out, ident, f"{spec.path.name}: elasticities at {args.at}")
     w = max(len(n) for n in spec.space.names)
     say(f"{'parameter':<{w}}  " + "  ".join(f"{q:>12}" for q in sens.quantities)

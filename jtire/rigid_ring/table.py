@@ -297,8 +297,10 @@ def read_characterization(path) -> Characterization:
         p = p / FILENAME
     if not p.is_file():
         raise ConfigError(f"characterization: no file {p}")
+    from ..config import read_text  # the one reader of input files (not UTF-8: one line naming it)
+
     try:
-        d = json.loads(p.read_text())
+        d = json.loads(read_text(p, "characterization"))
     except json.JSONDecodeError as e:
         raise ConfigError(f"characterization {p}: not valid JSON ({e.msg}, line {e.lineno})") from None
     return characterization_from_dict(d)
