@@ -1,4 +1,4 @@
-"""The `jtire` command line: `jtire run | sweep | compete | data | calibrate | sample | sensitivity`.
+"""The `jtire` command line: `jtire run | sweep | compete | data | calibrate | sample | sensitivity | export-vtk`.
 
 One module per subcommand in this package (`jtire.cli.run`, ...); this file only wires them together, and
 turns every expected failure (a bad config, an unstable simulation) into one line on stderr and a
@@ -24,6 +24,7 @@ SUBCOMMANDS = {
     "calibrate": ("jtire.cli.calibrate", "tune the tire's parameters to the calibration targets (ARSM or Levenberg-Marquardt)"),
     "sample": ("jtire.cli.sample", "posterior of the calibrated parameters (emcee on an emulator of the targets)"),
     "sensitivity": ("jtire.cli.sensitivity", "d(quantity)/d(log parameter) table, heat map and identifiable directions"),
+    "export-vtk": ("jtire.cli.export_vtk", "a run's recorded frames as ParaView .vtu files and a .pvd time series"),
 }
 
 
