@@ -133,7 +133,13 @@ class BlockMatrix(eqx.Module):
 
 
 def jacobian(fun, u, st: Structure, symmetric_border: bool = True):
-    """(fun(u), BlockMatrix of d fun / d u) for a residual with the structure `st`.
+    """(fun(u), BlockMatrix of d fun / d u) for a residual with the structure `st`."""
+    r, lin = jax.linearize(fun, u)
+    return r, jacobian_from_linear(lin, u, st, symmetric_border)
+
+
+def jacobian_from_linear(lin, u, st: Structure, symmetric_border: bool = True):
+    """BlockMatrix of the linear map `lin` (a linearization at u).
 
     symmetric_border: the border rows are the transposed border columns (exact when only forces
     with a potential couple the border to the ring: always for the rim; for a rigid belt unless
@@ -141,7 +147,6 @@ def jacobian(fun, u, st: Structure, symmetric_border: bool = True):
     (reverse-over-reverse: as long to compile as the columns).
     """
     T, B, nb, g, N = st.T, st.B, st.nb, st.g, st.N
-    r, lin = jax.linearize(fun, u)
     cols = jax.vmap(lin)(jnp.asarray(_seeds(st)))  # (n_seeds, n): row k = J seed_k
     if symmetric_border:
         rows = jnp.concatenate([cols[st.n_seeds - nb:, : T * B], cols[st.n_seeds - nb:, T * B:].T], axis=1)
@@ -169,7 +174,7 @@ def jacobian(fun, u, st: Structure, symmetric_border: bool = True):
     Cb = padv(cols[st.n_seeds - nb:, : T * B].T).reshape(N, g * B, nb)
     Rb = jnp.transpose(padv(rows[:, : T * B].T).reshape(N, g * B, nb), (0, 2, 1))
     E = rows[:, T * B:]
-    return r, BlockMatrix(D, Up, Lo, Cb, Rb, E)
+    return BlockMatrix(D, Up, Lo, Cb, Rb, E)
 
 
 def add_diagonal(A: BlockMatrix, dx, db):
@@ -289,3 +294,19 @@ def solve_flat(st: Structure, fac: Factor, v):
         out_r, out_b = solve(fac, ring, border)
         return jax.vmap(lambda a, b: from_padded(st, a, b), in_axes=(2, 1), out_axes=1)(out_r, out_b)
     return from_padded(st, *solve(fac, *to_padded(st, v)))
+
+
+def to_dense(st: Structure, A: BlockMatrix):
+    """(n, n) dense matrix of a BlockMatrix (for tests and small problems)."""
+    N, G, nb = st.N, st.G, st.nb
+    D = jnp.zeros((N * G + nb, N * G + nb))
+    for I in range(N):
+        rows = slice(I * G, (I + 1) * G)
+        D = D.at[rows, I * G:(I + 1) * G].add(A.D[I])
+        if N > 1:
+            J, K = (I + 1) % N, (I - 1) % N
+            D = D.at[rows, J * G:(J + 1) * G].add(A.Up[I]).at[rows, K * G:(K + 1) * G].add(A.Lo[I])
+        D = D.at[rows, N * G:].set(A.Cb[I]).at[N * G:, rows].set(A.Rb[I])
+    D = D.at[N * G:, N * G:].set(A.E)
+    keep = jnp.asarray(np.concatenate([np.arange(st.T * st.B), N * G + np.arange(nb)]))
+    return D[keep][:, keep]

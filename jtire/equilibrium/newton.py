@@ -60,8 +60,8 @@ class NewtonOptions(eqx.Module):
     lam0: Float[Array, ""] = eqx.field(default_factory=lambda: jnp.asarray(0.0, jnp.float64))
     max_iter: int = eqx.field(static=True, default=40)
     max_halvings: int = eqx.field(static=True, default=12)
-    krylov: int = eqx.field(static=True, default=30)
-    refresh_after: int = eqx.field(static=True, default=15)
+    krylov: int = eqx.field(static=True, default=40)
+    refresh_after: int = eqx.field(static=True, default=25)
     factor_at_solution: bool = eqx.field(static=True, default=False)
 
 
@@ -127,25 +127,26 @@ def _newton(model, params, setup, u0, P0, P0_valid, opts, factor_at_solution):
     merit = lambda r: jnp.sum((w * r) ** 2)  # noqa: E731
     sym = _symmetric_border(setup)
 
-    def assemble(u, lam):
-        r, A = LA.jacobian(fun, u, st, sym)
+    def factor_of(lin, u, lam):
+        A = LA.jacobian_from_linear(lin, u, st, sym)
         dx, db = LA.diagonal(A)
-        return r, LA.factor(LA.add_diagonal(A, lam * jnp.abs(dx), lam * jnp.abs(db)))
+        return LA.factor(LA.add_diagonal(A, lam * jnp.abs(dx), lam * jnp.abs(db)))
 
     def body(c):
         u, r, frim, it, lam, _, P, refresh, n_fac, n_kry = c
         refresh = refresh | (lam > 0) | (opts.krylov == 0)
+        # one linearization per iteration serves the assembly (when refactoring) and GMRES
+        r, lin = jax.linearize(fun, u)
+        P = jax.lax.cond(refresh, lambda _: factor_of(lin, u, lam), lambda _: P, None)
 
-        def direct(_):
-            r_, P_ = assemble(u, lam)
-            return -LA.solve_flat(st, P_, r_), r_, P_, jnp.asarray(0, jnp.int32)
+        def direct(_):  # P is J(u) (+ damping): the exact Newton step
+            return -LA.solve_flat(st, P, r), jnp.asarray(0, jnp.int32)
 
         def krylov(_):
-            r_, lin = jax.linearize(fun, u)
-            d, k, rel = gmres(lin, lambda v: LA.solve_flat(st, P, v), -r_, opts.eta, opts.krylov)
-            return d, r_, P, jnp.where(rel <= 0.5, k, opts.krylov + 1).astype(jnp.int32)  # > krylov: no usable step
+            d, k, rel = gmres(lin, lambda v: LA.solve_flat(st, P, v), -r, opts.eta, opts.krylov)
+            return d, jnp.where(rel <= 0.5, k, opts.krylov + 1).astype(jnp.int32)  # > krylov: no usable step
 
-        delta, r, P, k = jax.lax.cond(refresh, direct, krylov, None)
+        delta, k = jax.lax.cond(refresh, direct, krylov, None)
         n_fac = n_fac + refresh.astype(jnp.int32)
         phi0 = merit(r)
 
@@ -184,7 +185,8 @@ def _newton(model, params, setup, u0, P0, P0_valid, opts, factor_at_solution):
     c0 = (u0, jnp.full(st.n, jnp.inf), jnp.zeros(6), 0, opts.lam0, jnp.asarray(False), P0, ~P0_valid, 0, 0)
     u, r, frim, it, lam, done, P, refresh, n_fac, n_kry = jax.lax.while_loop(cond, body, c0)
     if factor_at_solution:  # every iteration ends with a step, so the last factor is never J(u*)
-        _, P = assemble(u, 0.0)
+        _, lin = jax.linearize(fun, u)
+        P = factor_of(lin, u, 0.0)
         n_fac = n_fac + 1
     f = lambda a: jnp.asarray(a, jnp.float64)  # noqa: E731
     info = jnp.stack([f(it), f(n_fac), f(n_kry), rmax(r), tol, scale, f(done)])

@@ -16,7 +16,7 @@ Unknowns: one flat vector u = (x (T, F, 3) segment-major, q (6,), b (6,) with a 
 Rim DOFs that are held and, with a rigid belt, the belt nodes are *dummies*: the mechanics uses
 the prescribed rim coordinate and the rigid belt's positions instead, and the dummy's own
 residual is DUMMY_SCALE (u - target), so the Jacobian keeps its shape and one Newton step puts
-the dummy where it belongs. `state_from_u` returns the mechanical values.
+the dummy where it belongs. `state_parts` returns the mechanical values.
 
 Static friction (`StaticSetup.anchors`, an `Anchors`). Each contact point's tread column is
 sheared by the trial shear
@@ -148,14 +148,19 @@ def rigid_belt_positions(model, b):
     return V(*(c[k] + b[k] + R[k, 0] * r.x + R[k, 1] * r.y + R[k, 2] * r.z for k in range(3)))
 
 
+def _with_rigid_belt(model, x, b):
+    """x with the belt nodes replaced by the rigid belt at pose b."""
+    xr = rigid_belt_positions(model, b)
+    m = model.belt_mask > 0
+    return V(*(jnp.where(m, a, c) for a, c in ((xr.x, x.x), (xr.y, x.y), (xr.z, x.z))))
+
+
 def mechanical(model, setup, u):
     """(x, q, b) the mechanics sees: held rim DOFs at their prescribed value, the belt rigid."""
     x, q, b = unpack(model, u, setup.rigid_belt)
     q = jnp.where(setup.rim_free > 0, q, setup.rim_position)
     if setup.rigid_belt:
-        xr = rigid_belt_positions(model, b)
-        m = model.belt_mask > 0
-        x = V(*(jnp.where(m, a, c) for a, c in ((xr.x, x.x), (xr.y, x.y), (xr.z, x.z))))
+        x = _with_rigid_belt(model, x, b)
     return x, q, b
 
 
@@ -241,11 +246,7 @@ def residual_and_rim(model, params, setup, u):
     q = jnp.where(setup.rim_free > 0, q_u, setup.rim_position)
 
     def kinematics(x_, q_, b_):
-        x = x_
-        if setup.rigid_belt:
-            xr = rigid_belt_positions(model, b_)
-            msk = model.belt_mask > 0
-            x = V(*(jnp.where(msk, a, c) for a, c in ((xr.x, x_.x), (xr.y, x_.y), (xr.z, x_.z))))
+        x = _with_rigid_belt(model, x_, b_) if setup.rigid_belt else x_
         X = model.assemble(x, q_)
         return model.strains(X), model.volume(X), model.tread_points(X), x
 
@@ -260,11 +261,6 @@ def residual_and_rim(model, params, setup, u):
     r = pack(rx, rq - f_rim, rb)
     mask = mechanical_mask(model, setup)
     return r * mask + dummy_residual(model, setup, u), -rq
-
-
-def residual(model, params, setup, u):
-    """(n,) residual (see `residual_and_rim`)."""
-    return residual_and_rim(model, params, setup, u)[0]
 
 
 def residual(model, params, setup, u):
