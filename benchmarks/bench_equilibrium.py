@@ -5,8 +5,8 @@ levels), E09 static (E01 + 5 kN lateral) and the forward-mode gradient of E02's 
 with respect to every MaterialParams leaf: compile time (first call minus the median of the later
 ones), the median wall time of `--repeat` compiled runs, Newton iterations, factorizations and
 GMRES iterations, and the quantities (k_sv secant and fit, deflection, footprint, k_l) beside
-today's transient results. Run it alone on the machine: `simslot --quiet python
-benchmarks/bench_equilibrium.py` (timings vary by +-40 % on a shared 2-core machine).
+today's transient results. Run it alone on the machine:
+`python benchmarks/bench_equilibrium.py` (timings vary by +-40 % on a shared 2-core machine).
 
     python benchmarks/bench_equilibrium.py --repeat 3
     python benchmarks/bench_equilibrium.py --mesh 32x5x4 --repeat 1     # the coarse ring
@@ -60,7 +60,7 @@ def main(argv=None):
     import jtire.equilibrium as EQ
     from jtire import units as U
     from jtire.config import load_tire
-    from jtire.experiments.static import footprint
+    from jtire.experiments.patch import extent, flat_gap
     from jtire.tire import make_tire
 
     nt, ns, nc = (int(v) for v in args.mesh.split("x"))
@@ -126,7 +126,7 @@ def main(argv=None):
     kfit = np.polyfit(d[sel], F[sel], 1)[0]
     e01 = res["E01"]
     y01 = jax.tree_util.tree_map(lambda a: a[-1], e01.ys)
-    length, width, area = footprint(m, y01, float(e01.road_height[-1]))
+    length, width, area = extent(m, y01, flat_gap(float(e01.road_height[-1])))
     e09 = res["E09 static"]
     qy = np.asarray(e09.q[:, 1])
     y_lat = qy[-1] - qy[-len(E09_LATERAL) - 1]

@@ -144,7 +144,15 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities):
         Case.of(c.get("load_N", 0.0), c["pressure_Pa"], dts[k], exp.aux(c)) for k, (_, c) in enumerate(flat)])
 
     def f(th):
-        outs = batch.simulate_batch(exp, model, params_of(th), cases)
+        if len(flat) == 1:
+            # one case: no batch axis. jacfwd's tangents are a vmap of their own, and a vmap of the
+            # tangents around a vmap of the cases broke JAX's batching of the static solver's Newton
+            # loop (carry batch axes swapped: "while_loop body function carry input and carry output
+            # must have equal types"); a single case needs no case axis anyway
+            one = jax.tree_util.tree_map(lambda a: a[0], cases)
+            outs = jax.tree_util.tree_map(lambda a: a[None], exp.simulate(model, params_of(th), one))
+        else:
+            outs = batch.simulate_batch(exp, model, params_of(th), cases)
         vals = []
         for i, cond in enumerate(conditions):
             mine = [jax.tree_util.tree_map(lambda a: a[k], outs) for k, (ii, _) in enumerate(flat) if ii == i]
@@ -158,3 +166,9 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities):
 
     J, v = jax.jacfwd(with_value, has_aux=True)(jnp.asarray(theta, dtype=jnp.float64))
     return np.asarray(v), np.asarray(J)
+
+
+def make_simulator(config, tire_spec) -> ShellSimulator:
+    """The shell-model simulator for a calibration config (calibration.spec.CalibrationSpec:
+    its space, targets and base_params) and a validated tire (jtire.config.TireSpec)."""
+    return ShellSimulator(config, tire_spec)

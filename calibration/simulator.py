@@ -3,7 +3,7 @@
 Everything in calibration/ (ARSM, the gradient route, sensitivities, the posterior's emulator
 and its simulator check) sees the tire only through a `Simulator`: a batch of log-parameter
 vectors in, the target responses out. The shell-model implementation lives with the batched
-runner (`make_simulator`); the tests use cheap stand-ins (`calibration.standin`).
+runner (`calibration.shell.make_simulator`); the tests use cheap stand-ins (`calibration.standin`).
 
 Contract (what an implementation must provide):
 
@@ -36,7 +36,7 @@ import numpy as np
 
 from .space import ParamSpace
 
-__all__ = ["Simulator", "make_simulator", "check_batch"]
+__all__ = ["Simulator", "check_batch"]
 
 
 class Simulator(abc.ABC):
@@ -66,11 +66,3 @@ def check_batch(sim: Simulator, thetas, values) -> np.ndarray:
         raise RuntimeError(f"{type(sim).__name__}.evaluate returned shape {values.shape} for "
                            f"{n} points; must be ({n}, {m})")
     return values
-
-
-def make_simulator(config, tire_spec) -> Simulator:
-    """The shell-model simulator for a calibration config (calibration.spec.CalibrationSpec:
-    its space, targets and base_params) and a validated tire (jtire.config.TireSpec)."""
-    from .shell import ShellSimulator
-
-    return ShellSimulator(config, tire_spec)

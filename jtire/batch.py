@@ -51,7 +51,9 @@ def shard(tree, n_devices: int):
     """Place a batch (leading axis) across the first n_devices devices; the compiled phase programs
     then run each device's share of the cases on that device (XLA partitions the batch)."""
     if n_devices <= 1:
-        return tree
+        # committed to the device like every phase program's output: a compiled program is specific
+        # to whether its inputs are committed, so uncommitted cases made the first phase trace apart
+        return jax.device_put(tree, jax.devices()[0])
     mesh = Mesh(np.array(jax.devices()[:n_devices]), ("cases",))
     return jax.device_put(tree, NamedSharding(mesh, PartitionSpec("cases")))
 
@@ -127,7 +129,7 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     dts = stable_steps(model, [plist[i] for i, _ in flat], [c["pressure_Pa"] for _, c in flat],
                        float(exp.proto.settle_damping))
     size = len(flat) if batch <= 0 else min(batch, len(flat))
-    n_dev = n_devices_for(size, devices)
+    n_dev = n_devices_for(size, devices) if exp.shardable else 1
     size = -(-size // n_dev) * n_dev  # a multiple of the device count
     pending = {}
     results = [None] * len(conditions)

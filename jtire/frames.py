@@ -111,3 +111,32 @@ def save_frames(path, frames: dict):
     buf = io.BytesIO()
     np.savez_compressed(buf, **{k: np.asarray(frames[k]) for k in FRAME_KEYS})
     return atomic_write_bytes(path, buf.getvalue())
+
+
+def frames_from_outputs(model, outputs) -> dict:
+    """The frames recorded by a run under `experiments.program.recording_frames` -> the frames dict.
+
+    outputs: one case's simulate outputs (a dict holding stacked `PhaseOut`s, e.g. "phases"), or a
+    list of them (only the first case is taken: one experiment run = one animation). Frames of
+    every phase are joined in time order; the samples a phase did not reach (it settled early:
+    times inf) are dropped. Contact pressure is on each phase's own surface (road, drum, cleat), so
+    z_road is NaN. ValueError when nothing was recorded."""
+    if isinstance(outputs, (list, tuple)):
+        outputs = outputs[0]
+    # the stacked PhaseOut values (`experiments.program`) that carry frames
+    found = [v.frames for v in outputs.values() if getattr(v, "frames", None) is not None]
+    if not found:
+        raise ValueError("no frames were recorded (run the experiment under recording_frames)")
+    keys = ("t", "x", "q", "nodes", "contact_pressure_Pa", "energy_density_J_per_m2")
+    # each: (phases, n_frames, ...) -> (phases * n_frames, ...)
+    cat = {k: np.concatenate([np.asarray(f[k]).reshape((-1,) + np.asarray(f[k]).shape[2:]) for f in found])
+           for k in keys}
+    ok = np.isfinite(cat["t"])
+    order = np.argsort(cat["t"][ok], kind="stable")
+    fr = {k: v[ok][order] for k, v in cat.items()}
+    # a phase's end and the next one's start are the same instant: keep one frame per time
+    keep = np.concatenate([np.diff(fr["t"]) > 0, [True]])
+    fr = {k: v[keep] for k, v in fr.items()}
+    fr["nodes_ref"] = np.asarray(real_nodes(model, model.x_ref, jnp.zeros(6)))
+    fr["z_road"] = np.full(len(fr["t"]), np.nan)
+    return fr

@@ -168,9 +168,10 @@ class PhaseResult(eqx.Module):
     settled: jax.Array  # the settle event fired
     blew_up: jax.Array  # the instability event fired
     n_steps: jax.Array
+    frames: dict = None  # frame fields at frame_ts (None unless asked for: `jtire run --frames`)
 
 
-def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_steps: int):
+def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_steps: int, frame_ts=None):
     """Integrate one phase from t0 to at most t1 (traced scalars); save `observe` at ts.
 
     Stops early when settled (t >= settle_after and KE < ke_tol) or unstable. Pass
@@ -178,6 +179,9 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
     it is only a bound (nothing is allocated per step), so every phase uses MAX_STEPS and shares
     one compiled program. Derivatives are forward mode (jax.jvp / jacfwd over a few parameters,
     physics notes: 2.9x a forward run for two parameters).
+    frame_ts: optional times at which to also save whole frames (`jtire.frames.frame_fields`: nodes,
+    contact pressure on the phase's own surface, strain-energy density, rim pose); samples after an
+    early end are inf. None (the default) adds nothing to the program.
     """
     def blow(t, y, args, **kw):
         speed = jnp.max(jnp.maximum(jnp.maximum(jnp.abs(y.v.x), jnp.abs(y.v.y)), jnp.abs(y.v.z)))
@@ -187,7 +191,17 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
         return (t >= settle_after) & (kinetic_energy(model, y) < ke_tol) & force_balanced(model, drive, t, y)
 
     fn = lambda t, y, args: observe(model, params, drive, t, y)  # noqa: E731
-    saveat = diffrax.SaveAt(subs=[diffrax.SubSaveAt(t1=True), diffrax.SubSaveAt(ts=ts, fn=fn)])
+    subs = [diffrax.SubSaveAt(t1=True), diffrax.SubSaveAt(ts=ts, fn=fn)]
+    if frame_ts is not None:
+        from .frames import frame_fields
+
+        def frame_fn(t, y, args):
+            nodes, p, energy = frame_fields(model, params, y, jnp.nan, t, surface=drive.surface)
+            x = jnp.stack([y.x.x, y.x.y, y.x.z], axis=-1)
+            return {"t": t, "x": x, "q": y.q, "nodes": nodes, "contact_pressure_Pa": p, "energy_density_J_per_m2": energy}
+
+        subs.append(diffrax.SubSaveAt(ts=frame_ts, fn=frame_fn))
+    saveat = diffrax.SaveAt(subs=subs)
     term = diffrax.ODETerm(lambda t, y, args: y)  # unused: the solver evaluates the model itself
     sol = diffrax.diffeqsolve(
         term, SymplecticEuler(), t0, t1, drive.dt, y0, args=(model, params, drive), saveat=saveat,
@@ -198,7 +212,7 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
     y_end = jax.tree_util.tree_map(lambda a: a[0], sol.ys[0])
     mask = sol.event_mask if sol.event_mask is not None else [jnp.array(False), jnp.array(False)]
     return PhaseResult(y=y_end, t_end=sol.ts[0][0], saved=sol.ys[1], settled=mask[1], blew_up=mask[0],
-                       n_steps=sol.stats["num_steps"])
+                       n_steps=sol.stats["num_steps"], frames=sol.ys[2] if frame_ts is not None else None)
 
 
 # One compiled program per (model, surface type, loop size, drive options), shared by every phase

@@ -139,27 +139,41 @@ def ok(result):
 # ---- the shared runs (each simulated once per session) ---------------------------------------------
 @pytest.fixture(scope="session")
 def e01_grid(runs):
-    """E01 over GRID, 4 cases on 2 devices. Requested before every other flat-road run of the
-    suite (the fixtures below depend on it), so its trace count is that of a fresh process."""
-    return runs("footprint", GRID, devices=2)
+    """E01 (transient method: the shared phase program) over GRID, 4 cases on 2 devices. Requested
+    before every other flat-road run of the suite (the fixtures below depend on it), so its trace
+    count is that of a fresh process."""
+    return runs("footprint", GRID, devices=2, method="transient")
 
 
 @pytest.fixture(scope="session")
 def e01_grid_unsharded(runs, e01_grid):
-    return runs("footprint", GRID, devices=1)
+    return runs("footprint", GRID, devices=1, method="transient")
 
 
 @pytest.fixture(scope="session")
 def e01_singles(runs, e01_grid):
-    return [runs("footprint", [c]) for c in GRID]
+    return [runs("footprint", [c], method="transient") for c in GRID]
 
 
-E02_TABLE = dict(ramp_s=0.15)  # 0.15 s: 2 % quasi-static on the coarse ring (its modes are faster than the default's)
+# 0.15 s: 2 % quasi-static on the coarse ring (its modes are faster than the default's)
+E02_TABLE = dict(ramp_s=0.15, method="transient")
 
 
 @pytest.fixture(scope="session")
 def e02(runs, e01_grid):
     return runs("vertical_stiffness", [RATED], **E02_TABLE)
+
+
+# The static method (the default of E01 and E02): one compiled static program (13 load levels),
+# shared by both. The command-line tests run the same program at the same conditions.
+@pytest.fixture(scope="session")
+def e01_static(runs):
+    return runs("footprint", [RATED])
+
+
+@pytest.fixture(scope="session")
+def e02_static(runs, e01_static):
+    return runs("vertical_stiffness", [RATED])
 
 
 @pytest.fixture(scope="session")

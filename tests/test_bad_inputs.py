@@ -19,6 +19,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from jtire.cli import SUBCOMMANDS, _available
@@ -385,10 +386,29 @@ CASES = [
          "--longvl nan: must be a speed"),
     Case("export-tir-fittyp-choice", lambda t: ["export-tir", _w(t, "c.json", "{}"), "--fittyp", "52"],
          "argument --fittyp: invalid choice"),
+    # ---- export-vtk and run --frames ------------------------------------------------------------------
+    Case("export-vtk-missing", lambda t: ["export-vtk", str(Path(t) / "nofolder")], "nofolder", "no such frames file"),
+    Case("export-vtk-not-npz", lambda t: ["export-vtk", _w(t, "f.npz", b"not a zip file")], "f.npz",
+         "not a readable .npz file"),
+    Case("export-vtk-missing-arrays", lambda t: ["export-vtk", _npz(t, t=np.zeros(2))], "missing arrays"),
+    Case("export-vtk-wrong-shape", lambda t: ["export-vtk", _npz(t, t=np.zeros(2), nodes=np.zeros((2, 4, 5, 3)),
+                                                                  nodes_ref=np.zeros((4, 6, 3)))],
+         "nodes has shape (2, 4, 5, 3), expected (2, 4, 6, 3)"),
+    Case("run-frames-out-of-range", lambda t: ["run", _exp(t, FOOTPRINT), "--frames", "1", *_out(t)],
+         "--frames: 1 is out of range", "2 to 200"),
+    Case("run-frames-without-out", lambda t: ["run", _exp(t, FOOTPRINT), "--frames", "5"], "--frames: needs --out"),
+    Case("run-method-unknown", lambda t: ["run", _exp(t, FOOTPRINT), "--set", 'footprint.method="implicit"'],
+         "footprint.method = 'implicit': must be one of static, transient"),
     # ---- the command line itself -----------------------------------------------------------------
     Case("unknown-subcommand", lambda t: ["simulate"], "invalid choice: 'simulate'"),
     Case("no-subcommand", lambda t: [], "the following arguments are required: command"),
 ]
+
+
+def _npz(folder, **arrays):
+    path = Path(folder) / "frames.npz"
+    np.savez(path, **arrays)
+    return str(path)
 
 
 def _exp_bytes_tire(t):
@@ -441,7 +461,7 @@ def _compete_foreign_history(t):
 
 def test_the_table_is_large_and_covers_every_subcommand():
     assert len(CASES) >= 60
-    names = {c.name.split("-")[0] if not c.name.startswith("export-tir") else "export-tir" for c in CASES}
+    names = {"-".join(c.name.split("-")[:2]) if c.name.startswith("export-") else c.name.split("-")[0] for c in CASES}
     for sub in SUBCOMMANDS:
         assert sub in names, f"no bad-input case for `jtire {sub}`"
 

@@ -23,17 +23,30 @@ TOL_BATCH = 1e-9
 QUANTITIES = ("contact_length_m", "contact_width_m", "contact_area_m2", "deflection_m", "k_secant_N_per_m")
 
 
+# Diagnostics of the fastest node at a phase's end (for the unstable-run message): at a settled end all
+# speeds are ~1e-4 m/s of round-off-level differences, so which node is fastest is not reproducible
+DIAGNOSTIC = ("speed_max", "where_max")
+
+
 def max_rel_diff(a, b, floor):
-    """Largest |a - b| / (|b| + floor) over every leaf of two output pytrees (inf samples must match)."""
-    worst = 0.0
-    for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b), strict=True):
+    """Largest |a - b| / (|b| + floor) over every leaf of two output pytrees (inf samples must match),
+    diagnostics excluded. Returns (value, the leaf's path)."""
+    worst, where = 0.0, None
+    la = jax.tree_util.tree_leaves_with_path(a)
+    lb = jax.tree_util.tree_leaves(b)
+    for (path, x), y in zip(la, lb, strict=True):
+        name = jax.tree_util.keystr(path)
+        if any(d in name for d in DIAGNOSTIC):
+            continue
         x, y = np.asarray(x, float), np.asarray(y, float)
         assert x.shape == y.shape
         fin = np.isfinite(y)
-        assert np.array_equal(np.isfinite(x), fin), "a phase ended at another sample"
+        assert np.array_equal(np.isfinite(x), fin), f"{name}: a phase ended at another sample"
         if fin.any():
-            worst = max(worst, float(np.max(np.abs(x[fin] - y[fin]) / (np.abs(y[fin]) + floor))))
-    return worst
+            d = float(np.max(np.abs(x[fin] - y[fin]) / (np.abs(y[fin]) + floor)))
+            if d > worst:
+                worst, where = d, name
+    return worst, where
 
 
 def assert_same_runs(results_a, results_b):
@@ -44,7 +57,7 @@ def assert_same_runs(results_a, results_b):
         assert a.info["phase_steps"] == b.info["phase_steps"], a.condition  # the same step counts
         # every saved sample (floor 1e-6 of the unit: positions in m, forces in N, energies in J
         # that are exactly 0 in one run and ~1e-18 in the other)
-        assert max_rel_diff(a.outputs, b.outputs, 1e-6) < TOL_BATCH, a.condition
+        assert max_rel_diff(a.outputs, b.outputs, 1e-6)[0] < TOL_BATCH, (a.condition, max_rel_diff(a.outputs, b.outputs, 1e-6))
 
 
 # ---- one trace per phase structure ------------------------------------------------------------------
@@ -146,6 +159,12 @@ def _traced_vs_host(run, tire):
 
 def test_traced_equals_host_footprint(e01_grid, coarse_tire):
     _traced_vs_host(e01_grid, coarse_tire)
+
+
+def test_traced_equals_host_static(e01_static, e02_static, coarse_tire):
+    """E01 and E02 solved as static equilibria: the traced reductions read the same levels."""
+    _traced_vs_host(e01_static, coarse_tire)
+    _traced_vs_host(e02_static, coarse_tire)
 
 
 def test_traced_equals_host_vertical_and_lateral(e02, e09, coarse_tire):

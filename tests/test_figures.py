@@ -79,6 +79,9 @@ def _run(stem, argv, capsys):
     return int(m.group(1))
 
 
+# Drawing every figure from results needs every experiment the figures use run first (the char_dir
+# fixture: drum, free drum, rigid belt, cornering programs; ~5-8 min here): slow checks.
+@pytest.mark.slow
 @pytest.mark.parametrize("stem", sorted(FIGURES))
 def test_figure_from_results(stem, char_dir, tmp_path, capsys):
     experiment, kind = FIGURES[stem]
@@ -90,6 +93,7 @@ def test_figure_from_results(stem, char_dir, tmp_path, capsys):
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.slow
 def test_plain_sweep_layout_is_read(char_dir, tmp_path):
     """`jtire sweep` writes DIR/cases/... without the experiment level: the same cases come back."""
     shutil.copytree(char_dir / "drop_test", tmp_path / "sweep")
@@ -113,6 +117,7 @@ def test_selection_from_a_grid():
     assert len(_data.select(grid, "grid")) == 9
 
 
+@pytest.mark.slow
 def test_footprint_pressure_integrates_to_the_load(char_dir):
     """The contact pressure of a simulated, settled footprint times each point's area, summed over
     the patch, is the rim load (the road carries the wheel)."""

@@ -41,10 +41,11 @@ def test_wheel_installs_and_runs(tmp_path):
     assert Path(where.strip()).is_relative_to(venv)
     assert "--set KEY=VALUE" in _run([jtire, "run", "--help"], cwd=work, env=env).stdout
     # one short run: the shipped default config (E01, E02, E09 at rated) on the coarse ring
-    sets = [a for s in COARSE_SET + SOLVER_SET + ["vertical_stiffness.ramp_s=0.15"] for a in ("--set", s)]
+    sets = [a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)]
     p = _run([jtire, "run", *sets, "--out", "out"], cwd=work, env=env, timeout=1800)
     assert "footprint: pressure 827.4 kPa" in p.stdout
     for name in ("footprint", "vertical_stiffness", "lateral_stiffness"):
         d = json.loads((work / "out" / name / "result.json").read_text())
-        assert d["checks"]["load_settled"], name
+        # E01, E02: static equilibria (converged); E09: a transient (settled)
+        assert d["checks"].get("static_converged", d["checks"].get("load_settled")), name
     assert (work / "out" / "summary.csv").is_file()

@@ -38,7 +38,6 @@ def inflated_torus(spec):
                        "E_meridional": jnp.full(6, ET / t), "E_circumferential": jnp.full(6, ET / t),
                        "G_shear": jnp.full(6, 0.3 * ET / t), "E_bending": jnp.full(6, 1e4),
                        "thickness": jnp.full(6, t), "loss": jnp.zeros(6), "undertread_E": jnp.asarray(0.0)})
-    import jax.numpy as jnp
 
     from jtire import solve
     from jtire.experiments import phases

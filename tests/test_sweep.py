@@ -25,7 +25,10 @@ from .conftest import COARSE_SET, REPO, SOLVER_SET
 
 FOOTPRINT = REPO / "configs" / "experiments" / "footprint.toml"
 ARGS = [str(FOOTPRINT), *[a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)],
-        "--set", "sweep.loads_kg=[2312.5, 4625.0]", "--set", "sweep.pressures_psi=[120.0, 150.0]", "--batch", "1"]
+        "--set", "sweep.loads_kg=[2312.5, 4625.0]", "--set", "sweep.pressures_psi=[120.0, 150.0]", "--batch", "1",
+        # the transient method: the single-case program the in-process tests compiled (this file tests
+        # the folder machinery, not the method)
+        "--set", "footprint.method=transient"]
 CMD = [sys.executable, "-c", "import sys; from jtire.cli import main; sys.exit(main(sys.argv[1:]))", "sweep"]
 N_CASES = 4
 TIMEOUT_S = 900  # a cold start (nothing in the compilation cache) compiles the program: minutes

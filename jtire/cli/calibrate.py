@@ -27,9 +27,9 @@ def add_arguments(parser):
 
 
 def simulator_for(spec, standin: bool, say):
-    """The shell simulator (calibration.simulator.make_simulator) or the stand-in; a missing
+    """The shell simulator (calibration.shell.make_simulator) or the stand-in; a missing
     shell simulator is reported as one line (returns None)."""
-    from ..calibration.simulator import make_simulator
+    from ..calibration.shell import make_simulator
     from ..calibration.standin import StandinSimulator
 
     if standin:

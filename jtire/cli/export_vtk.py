@@ -15,11 +15,18 @@ def run_cli(args, say) -> int:
     from ..vtk import load_frames, write_series
 
     src = Path(args.run_dir)
-    frames = load_frames(src)
-    base = src if src.is_dir() else src.parent
-    out = Path(args.out) if args.out else base / "vtk"
-    pvd = write_series(frames, out, args.name)
-    n = len(frames["t"])
-    T, S = frames["nodes_ref"].shape[:2]
-    say(f"wrote {n} frames ({T * S} points, {T * (S - 1)} quads each) and {pvd}")
+    # a run of several experiments keeps one frames.npz per experiment folder
+    sources = [src] if not src.is_dir() or (src / "frames.npz").is_file() else sorted(
+        p.parent for p in src.glob("*/frames.npz"))
+    if not sources:
+        sources = [src]  # load_frames names the missing file
+    for one in sources:
+        frames = load_frames(one)
+        base = one if one.is_dir() else one.parent
+        out = Path(args.out) / base.name if args.out and len(sources) > 1 else (
+            Path(args.out) if args.out else base / "vtk")
+        pvd = write_series(frames, out, args.name)
+        n = len(frames["t"])
+        T, S = frames["nodes_ref"].shape[:2]
+        say(f"wrote {n} frames ({T * S} points, {T * (S - 1)} quads each) and {pvd}")
     return 0

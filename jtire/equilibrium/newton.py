@@ -251,7 +251,8 @@ def solve_static_full(model, params, setup, y_guess, opts: NewtonOptions = Newto
     x, q, z = R.state_parts(model, params, setup, u)
     nb = len(params.relaxation_times)
     zero = jnp.zeros((), jnp.float64)
-    y = TireState(x, x.map(jnp.zeros_like), q, jnp.zeros(6), jnp.zeros((nb, model.s0.shape[0])), z, zero, zero, zero)
+    y = TireState(x, x.map(jnp.zeros_like), q, jnp.zeros(6), jnp.zeros((nb, model.s0.shape[0])), z, zero, zero, zero,
+                  jnp.zeros(6), jnp.zeros(2))
     i32 = lambda a: a.astype(jnp.int32)  # noqa: E731
     out = StaticInfo(i32(info[0]), i32(info[1]), i32(info[2]), info[3], info[4], info[5], info[6] > 0.5)
     return y, frim, out, P

@@ -38,6 +38,14 @@ class Experiment(eqx.Module):
 
     proto: Protocol
 
+    @property
+    def shardable(self) -> bool:
+        """Whether a batch of this experiment may be split over several devices. Static solves may
+        not: their Newton loops end after a different number of iterations on each device, and the
+        partitioned program then deadlocks on CPU host devices (measured: a 4-case E01 static batch
+        on 2 devices hung with every thread waiting); they run vmapped on one device."""
+        return getattr(self, "method", "transient") != "static"
+
     @classmethod
     @abc.abstractmethod
     def from_table(cls, table: dict, proto: Protocol, tire_spec) -> "Experiment":

@@ -1,7 +1,9 @@
 """E01 footprint: contact patch length 2a and width w under the condition's load on a flat road.
 
-Phases: inflate (rim held) -> the road placed at the first contact height -> the load ramped onto the
-rim (z free) and settled. Reduction: the patch extent of the settled state (`patch`), the rim
+Method "static" (default): inflation, first contact and the load applied in STATIC_LOADS equal
+static levels (`static_path`: static equilibrium, long-term moduli, friction carried from level to
+level; one compiled program shared with E02). Method "transient": inflate (rim held) -> the road
+placed at the first contact height -> the load ramped onto the rim (z free) and settled. Reduction: the patch extent of the settled state (`patch`), the rim
 deflection, and the checks that the road carries the load and no lateral force (a mirror-symmetric
 tire). Internal ISO axes (z up); lengths and deflections are reported as positive magnitudes.
 """
@@ -14,11 +16,13 @@ from .. import solve
 from ..errors import SimulationError
 from ..state import TireState
 from . import patch
+from ..schema import Field
 from .base import Experiment
 from .loads import DOWN, RIM_Z
 from .phases import FAR, flat_road, inflate_branch, load_branch
 from .program import check_phase, last_valid, phase, phase_checks, require_equilibrium, run_plan
 from .result import ExperimentResult
+from .static_path import STATIC_LOADS, check_static_path, static_vertical_path
 
 
 def loaded_plan(model, params, case, proto, load, n_save, extra=(), ramp=None, mem=None):
@@ -43,16 +47,21 @@ class Footprint(Experiment):
     name = "footprint"
     study_id = "E01"
     description = "E01 contact patch length and width"
-    schema = {}
+    schema = {"method": Field(str, default="static", choices=("static", "transient"))}
     traced_names = ("contact_length_m", "contact_width_m", "deflection_m")
 
+    method: str = eqx.field(static=True, default="static")
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):
-        return cls(proto=proto)
+        return cls(proto=proto, method=table["method"])
 
     def simulate(self, model, params, case):
+        if self.method == "static":
+            loads = case.load * jnp.arange(1, STATIC_LOADS + 1) / STATIC_LOADS
+            out = static_vertical_path(model, params, case.pressure, loads)
+            return {"static": out, "y": out["y"], "z_road": out["road_height"][-1]}
         outs, y, mem = loaded_plan(model, params, case, self.proto, case.load, self.n_save)
         return {"phases": outs, "y": y, "z_road": mem["z_road"]}
 
@@ -64,15 +73,29 @@ class Footprint(Experiment):
     def reduce(self, tire, condition, outputs):
         out = outputs[0]
         model, load = tire.model, condition["load_N"]
-        inf, ld = phase(out["phases"], 0), phase(out["phases"], 1)
-        check_phase("inflate", inf, model)
-        check_phase("load", ld, model)
-        checks = phase_checks("inflate", inf, model) | phase_checks("load", ld, model)
+        if self.method == "static":
+            st = out["static"]
+            check_static_path("footprint", st)
+            infos = st["infos"]
+            fz, fy = float(np.asarray(st["contact"])[-1, 2]), float(np.asarray(st["contact"])[-1, 1])
+            err = abs(fz - load) / load
+            res = np.asarray(infos.residual_max) / np.asarray(infos.load_scale)
+            checks = {"static_converged": bool(np.all(np.asarray(infos.converged))),
+                      "static_residual_max_rel": float(res.max())}
+            info = {"method": "static", "levels": int(len(np.asarray(st["loads"])) + 2),
+                    "newton_iterations": int(np.sum(infos.iterations)),
+                    "factorizations": int(np.sum(infos.factorizations))}
+        else:
+            inf, ld = phase(out["phases"], 0), phase(out["phases"], 1)
+            check_phase("inflate", inf, model)
+            check_phase("load", ld, model)
+            checks = phase_checks("inflate", inf, model) | phase_checks("load", ld, model)
+            fz, err, fy = contact_check(ld.saved, load)
+            info = run_info(out["phases"])
+        require_equilibrium("footprint: load phase", fz, load)
         z_road = float(out["z_road"])
         length, width, area = patch.extent(model, out["y"], patch.flat_gap(z_road))
         deflection = -float(out["y"].q[2])
-        fz, err, fy = contact_check(ld.saved, load)
-        require_equilibrium("footprint: load phase", fz, load)
         checks |= {"contact_force_N": fz, "contact_vs_load_rel_error": err, "contact_lateral_force_N": fy}
         if length <= 0 or width <= 0:
             raise SimulationError(f"footprint: no contact patch (length {length:.3g} m, width {width:.3g} m) "
@@ -84,7 +107,7 @@ class Footprint(Experiment):
              "geometric_chord_m": 2 * np.sqrt(max(R**2 - (R - deflection) ** 2, 0.0)),
              "measured_contact_length_m": ref["footprint_length_mm"] or None,
              "measured_contact_width_m": ref["footprint_width_mm"] or None}
-        return ExperimentResult(self.name, condition, q, checks=checks, info=run_info(out["phases"]))
+        return ExperimentResult(self.name, condition, q, checks=checks, info=info)
 
 
 def run_info(phases) -> dict:

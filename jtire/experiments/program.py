@@ -14,6 +14,9 @@ times, steps, the settled / unstable flags and the `solve.observe` samples at `n
 over the phase's maximum span (samples after an early end are inf).
 """
 
+import contextlib
+import contextvars
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -51,6 +54,7 @@ class PhaseOut(eqx.Module):
     speed_max: jax.Array
     where_max: jax.Array  # (2,) int: segment, free-node column of the fastest node
     saved: dict
+    frames: dict = None  # whole frames at n_frames uniform times + the end (only under `recording_frames`)
 
 
 def f64(x):
@@ -58,11 +62,13 @@ def f64(x):
     return jnp.asarray(x, dtype=jnp.float64)
 
 
-def _run_one(model, params, ph: Phase, t, ke_tol, n_save: int):
+def _run_one(model, params, ph: Phase, t, ke_tol, n_save: int, n_frames: int = 0):
     """One phase from its branch's description: integrate, summarize. Returns (PhaseOut, end state)."""
     t1 = t + ph.duration
     ts = jnp.linspace(t, t1, n_save)
-    res = solve.run_phase(model, params, ph.drive, ph.y0, t, t1, ts, t + ph.settle_after, ke_tol, solve.MAX_STEPS)
+    frame_ts = jnp.linspace(t, t1, n_frames) if n_frames else None
+    res = solve.run_phase(model, params, ph.drive, ph.y0, t, t1, ts, t + ph.settle_after, ke_tol, solve.MAX_STEPS,
+                          frame_ts)
     v = res.y.v
     speed = jnp.sqrt(v.x**2 + v.y**2 + v.z**2)
     speed = jnp.where(jnp.isfinite(speed), speed, jnp.inf)
@@ -70,8 +76,22 @@ def _run_one(model, params, ph: Phase, t, ke_tol, n_save: int):
     out = PhaseOut(t0=t, t_end=res.t_end, n_steps=res.n_steps, settled=res.settled, blew_up=res.blew_up,
                    ke_end=solve.kinetic_energy(model, res.y), q_end=res.y.q, qd_end=res.y.qd,
                    speed_max=speed.reshape(-1)[k_max], where_max=jnp.stack(jnp.unravel_index(k_max, speed.shape)),
-                   saved=res.saved)
+                   saved=res.saved, frames=_with_end_frame(model, params, ph, res))
     return out, res.y
+
+
+def _with_end_frame(model, params, ph, res):
+    """The recorded frames plus the phase's end state (a phase that settles early reaches only
+    some of its uniform frame times; its end is always shown)."""
+    if res.frames is None:
+        return None
+    from ..frames import frame_fields
+
+    y = res.y
+    nodes, p, energy = frame_fields(model, params, y, jnp.nan, res.t_end, surface=ph.drive.surface)
+    end = {"t": res.t_end, "x": jnp.stack([y.x.x, y.x.y, y.x.z], axis=-1), "q": y.q, "nodes": nodes,
+           "contact_pressure_Pa": p, "energy_density_J_per_m2": energy}
+    return {k: jnp.concatenate([res.frames[k], end[k][None]]) for k in res.frames}
 
 
 # One compiled program per phase *structure* (surface type, rigid belt, belt loads, samples per phase,
@@ -86,6 +106,21 @@ run_one = eqx.filter_jit(_run_one_counted)
 def phase_traces() -> int:
     """Times the phase program has been traced in this process (a test proves a grid traces it once)."""
     return eqx.debug.get_num_traces(_run_one_counted)
+
+
+_N_FRAMES = contextvars.ContextVar("jtire_n_frames", default=0)
+
+
+@contextlib.contextmanager
+def recording_frames(n: int):
+    """Within this block every phase also saves whole frames (`PhaseOut.frames`), for `jtire run
+    --frames`: at n uniform times over the phase's longest span (those after a settled phase's early
+    end are not reached) and at its end. A separate compiled program (n is static)."""
+    token = _N_FRAMES.set(int(n))
+    try:
+        yield
+    finally:
+        _N_FRAMES.reset(token)
 
 
 def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
@@ -110,7 +145,7 @@ def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
         # state) compiled a program of its own, and sharded batches traced it again per pattern.
         z = 0.0 * ph.drive.dt
         ph = jax.tree_util.tree_map(lambda a: a + z.astype(a.dtype), ph)
-        out, y = run_one(model, params, ph, t + z, ke_tol + z, n_save)
+        out, y = run_one(model, params, ph, t + z, ke_tol + z, n_save, _N_FRAMES.get())
         outs.append(out)
         t = out.t_end
     return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *outs), y, mem

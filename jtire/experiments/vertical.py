@@ -1,9 +1,17 @@
-"""E02 total static vertical stiffness k_sv: the rim load ramped 0 -> max_load on a flat road.
+"""E02 total static vertical stiffness k_sv: the rim load 0 -> max_load on a flat road.
 
 k_sv is the secant load / deflection at the stated load (calibration variant: 50 kN at 120 psi must
 give 39.0625 mm) and, beside it, the slope of a linear fit of load against deflection over
-`fit_range`. Deflection is the rim's travel from first contact. The ramp must be quasi-static (its
-viscoelastic lag is checked against the settled state at the maximum load).
+`fit_range`. Deflection is the rim's travel from first contact.
+
+Two methods (`method` in the table):
+- "static" (default): static equilibrium at `n_levels` load levels up to max_load and at the stated
+  load (`jtire.equilibrium`: Newton on the static residual with long-term moduli, friction carried
+  from level to level). A static quantity has no rate: nothing to tune, no viscoelastic lag, each
+  level converged to a stated force residual (checked; a level that does not converge is an error
+  naming it), and derivatives by the implicit function theorem.
+- "transient": the explicit dynamics with the load ramped over `ramp_s` and settled at max_load (the
+  ramp's viscoelastic lag is checked against the settled state).
 """
 
 import equinox as eqx
@@ -19,13 +27,16 @@ from .base import Experiment
 from .footprint import contact_check, loaded_plan, run_info
 from .program import check_phase, f64, phase, phase_checks, require_equilibrium
 from .result import ExperimentResult
+from .static_path import STATIC_LOADS, check_static_path, static_vertical_path
 
 
 class VerticalStiffness(Experiment):
     name = "vertical_stiffness"
     study_id = "E02"
     description = "E02 total static vertical stiffness k_sv"
-    schema = {"max_load_kN": Field(float, U.KN, 1, 500, 60.0, "kN"),
+    schema = {"method": Field(str, default="static", choices=("static", "transient")),
+              "n_levels": Field(int, 1, 4, 60, STATIC_LOADS - 1, "load levels of the static load path (static method)"),
+              "max_load_kN": Field(float, U.KN, 1, 500, 60.0, "kN"),
               "stated_load_kN": Field(float, U.KN, 0, 500, 0.0, "kN (0: the condition's load)"),
               "ramp_s": Field(float, 1, 0.02, 5, 0.9, "s"),  # 0.3 s read 4.8 % stiff at 45 kN (viscoelastic lag), 0.9 s 1.0 %
               "fit_range_kN": Field(list, U.KN, 0, 500, [10.0, 60.0], "kN")}
@@ -35,6 +46,8 @@ class VerticalStiffness(Experiment):
     stated_load: jax.Array  # N; 0: the condition's load
     ramp: jax.Array
     fit_range: tuple = eqx.field(static=True)
+    method: str = eqx.field(static=True, default="static")
+    n_levels: int = eqx.field(static=True, default=STATIC_LOADS - 1)
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)
 
     @classmethod
@@ -46,7 +59,8 @@ class VerticalStiffness(Experiment):
         if hi > mx:
             raise ConfigError(f"vertical_stiffness.fit_range_kN = [{lo / 1e3:g}, {hi / 1e3:g}]: must end at or below "
                               f"max_load_kN = {mx / 1e3:g}")
-        return cls(proto=proto, max_load=f64(mx), stated_load=f64(st), ramp=f64(table["ramp_s"]), fit_range=(lo, hi))
+        return cls(proto=proto, max_load=f64(mx), stated_load=f64(st), ramp=f64(table["ramp_s"]), fit_range=(lo, hi),
+                   method=table["method"], n_levels=int(table["n_levels"]))
 
     def check_condition(self, condition):
         """The stated load (or the condition's) must lie on the ramp."""
@@ -60,6 +74,8 @@ class VerticalStiffness(Experiment):
         return condition["load_N"] if st <= 0 else st
 
     def simulate(self, model, params, case):
+        if self.method == "static":
+            return self._simulate_static(model, params, case)
         outs, y, mem = loaded_plan(model, params, case, self.proto, self.max_load, self.n_save, ramp=self.ramp)
         return {"phases": outs, "z_road": mem["z_road"]}
 
@@ -67,7 +83,53 @@ class VerticalStiffness(Experiment):
         t = np.linspace(float(ld.t0), float(ld.t0) + float(self.ramp) + float(self.proto.settle_max), self.n_save)
         return t
 
+    # ---- static method -------------------------------------------------------------------------
+    def _levels(self, stated):
+        """Load levels (N, ascending): n_levels evenly up to max_load, and the stated load."""
+        grid = self.max_load * jnp.arange(1, self.n_levels + 1) / self.n_levels
+        return jnp.sort(jnp.concatenate([grid, jnp.atleast_1d(stated)]))
+
+    def _simulate_static(self, model, params, case):
+        stated = jnp.where(self.stated_load > 0, self.stated_load, case.load)
+        loads = self._levels(stated)
+        return static_vertical_path(model, params, case.pressure, loads) | {"stated": stated}
+
+    def _traced_static(self, out):
+        loads, defl = out["loads"], -out["q"][2:, 2]
+        k = jnp.argmin(jnp.abs(loads - out["stated"]))
+        return {"k_sv_N_per_m": out["stated"] / defl[k], "deflection_m": defl[k]}
+
+    def _reduce_static(self, tire, condition, out):
+        loads = np.asarray(out["loads"])
+        stated = self._stated(condition)
+        check_static_path("vertical_stiffness", out)
+        infos = out["infos"]
+        defl = -np.asarray(out["q"])[2:, 2]
+        fz = np.asarray(out["contact"])[2:, 2]
+        k = int(np.argmin(np.abs(loads - stated)))
+        lo, hi = self.fit_range
+        sel = (loads >= lo - 1e-6) & (loads <= hi + 1e-6)
+        if sel.sum() < 3:
+            raise ConfigError(f"vertical_stiffness.fit_range_kN = [{lo / 1e3:g}, {hi / 1e3:g}]: holds {int(sel.sum())} of "
+                              f"the static load levels (needs 3; raise n_levels)")
+        fit = signals.linear_slope(defl[sel], loads[sel])
+        require_equilibrium("vertical_stiffness: at the maximum load", float(fz[-1]), float(loads[-1]))
+        res = np.asarray(infos.residual_max) / np.asarray(infos.load_scale)
+        checks = {"static_converged": bool(np.all(np.asarray(infos.converged))),
+                  "static_residual_max_rel": float(res.max()),
+                  "contact_vs_load_max_rel_error": float(np.max(np.abs(fz - loads) / loads))}
+        q = {"k_sv_N_per_m": stated / defl[k], "k_sv_fit_N_per_m": fit.slope, "deflection_m": float(defl[k]),
+             "stated_load_N": stated, "max_load_N": float(loads[-1]), "fit_r2": fit.r2,
+             "settled_deflection_at_max_load_m": float(defl[-1])}
+        sig = {"load_N": loads, "contact_force_N": fz, "deflection_m": defl}
+        info = {"method": "static", "newton_iterations": int(np.sum(infos.iterations)),
+                "factorizations": int(np.sum(infos.factorizations)), "krylov_iterations": int(np.sum(infos.krylov)),
+                "levels": int(len(loads) + 2)}
+        return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
+
     def traced(self, model, params, condition_cases, outputs):
+        if self.method == "static":
+            return self._traced_static(outputs[0])
         ld = jax.tree_util.tree_map(lambda a: a[1], outputs[0]["phases"])
         stated = jnp.where(self.stated_load > 0, self.stated_load, condition_cases[0]["load_N"])
         t = jnp.linspace(ld.t0, ld.t0 + self.ramp + self.proto.settle_max, self.n_save)
@@ -84,6 +146,8 @@ class VerticalStiffness(Experiment):
         out = outputs[0]
         model = tire.model
         self.check_condition(condition)
+        if self.method == "static":
+            return self._reduce_static(tire, condition, out)
         stated = self._stated(condition)
         inf, ld = phase(out["phases"], 0), phase(out["phases"], 1)
         check_phase("inflate", inf, model)

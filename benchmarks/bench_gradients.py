@@ -1,0 +1,80 @@
+"""Benchmark: the price of a gradient with respect to every material leaf, as a multiple of one forward
+run of the same program (after compile), for E02's deflection at 50 kN and E12's mean drag.
+
+Forward mode: `jax.jacfwd` through the experiment (one vmapped tangent per leaf: d = 42 scalar leaves of
+MaterialParams, every one a calibratable modulus, thickness, loss or friction). The steps are held at
+their values (a numerical setting, not physics). Every figure is the best of --repeat runs.
+
+    python benchmarks/bench_gradients.py                      # default mesh
+    python benchmarks/bench_gradients.py --mesh 32x5x4 --short
+"""
+
+import argparse
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--mesh", default="64x5x6")
+    ap.add_argument("--repeat", type=int, default=2)
+    ap.add_argument("--short", action="store_true", help="short E12 stages (a quick check, not the reported figure)")
+    ap.add_argument("--experiments", nargs="+", default=["vertical_stiffness", "rolling_resistance"])
+    args = ap.parse_args(argv)
+
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    import jtire  # noqa: F401
+    from jtire import batch
+    from jtire.calibration.shell import traced_jacobian
+    from jtire.config import load_run_config
+    from jtire.tire import make_tire
+
+    nt, ns, nc = (int(v) for v in args.mesh.split("x"))
+    mesh = [f"tire.mesh.n_theta={nt}", f"tire.mesh.n_side={ns}", f"tire.mesh.n_crown={nc}"]
+    extra = {"vertical_stiffness": ["vertical_stiffness.stated_load_kN=50"],
+             "rolling_resistance": ["rolling_resistance.settle_s=0.02", "rolling_resistance.ramp_s=0.02",
+                                    "rolling_resistance.release_s=0.01", "rolling_resistance.measure_s=0.03"]
+             if args.short else []}
+    qty = {"vertical_stiffness": "deflection_m", "rolling_resistance": "rolling_resistance_N"}
+    print(f"gradient of one quantity w.r.t. all MaterialParams leaves, mesh {args.mesh}, best of {args.repeat}")
+    print("| experiment | quantity | leaves | forward run [s] | jacfwd [s] | cost / forward | value |")
+    print("|---|---|---|---|---|---|---|")
+    for name in args.experiments:
+        rc = load_run_config(REPO / "configs" / "experiments" / f"{name}.toml", mesh + extra.get(name, []))
+        tire = make_tire(rc.tire)
+        exp = rc.experiments[0]
+        flat, unravel = jax.flatten_util.ravel_pytree(tire.params)
+        theta0 = jnp.log(flat)
+        params_of = lambda th: unravel(jnp.exp(th))  # noqa: E731  (every leaf positive: log space)
+
+        def forward():
+            return batch.run(exp, tire, [rc.condition])[0]
+
+        def gradient():
+            return traced_jacobian(exp, tire, params_of, theta0, [rc.condition], [qty[name]])
+
+        res = forward()
+        g = gradient()
+        tf, tg = [], []
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            forward()
+            tf.append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            v, J = gradient()
+            tg.append(time.perf_counter() - t0)
+        f, gg = min(tf), min(tg)
+        print(f"| {name} | {qty[name]} | {flat.size} | {f:.1f} | {gg:.1f} | {gg / f:.1f} | {float(v[0]):.6g} "
+              f"(host {res.quantities[qty[name]]:.6g}) |", flush=True)
+        del g
+
+
+if __name__ == "__main__":
+    import jax.flatten_util  # noqa: F401
+
+    main()
