@@ -199,8 +199,10 @@ def test_frames_and_vtk(user_dir, capsys, e01_grid):
     assert np.all(fr["contact_pressure_Pa"][0] == 0.0)  # the first frame: before any contact
     assert fr["contact_pressure_Pa"][-1].max() > 1e5  # loaded on the road: of the order of the inflation
     q = json.loads((run / "result.json").read_text())["quantities"]
+    # the rim's lateral travel from its place before the lateral load: largest at the lateral phase's
+    # end (a frame); the free decay after the release overshoots by less (damped), so not np.ptp
     y = fr["q"][:, 1]
-    assert np.ptp(y) == pytest.approx(q["lateral_deflection_m"], rel=0.05)
+    assert np.max(np.abs(y - y[0])) == pytest.approx(q["lateral_deflection_m"], rel=0.05)
     capsys.readouterr()
     assert jtire("jtire export-vtk runs/e09") == 0
     assert f"wrote {n} frames" in capsys.readouterr().out
