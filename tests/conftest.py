@@ -177,6 +177,13 @@ def e02_static(runs, e01_static):
 
 
 @pytest.fixture(scope="session")
+def e09_static(runs, e01_static):
+    """E09's static part as a static equilibrium (decay_s = 0: method "auto" is static), on the
+    program of E01 and E02."""
+    return runs("lateral_stiffness", [RATED], decay_s=0.0)
+
+
+@pytest.fixture(scope="session")
 def e09(runs, e01_grid):
     """E09 with its release decay (0.15 s: ~5 periods of the ~30 Hz lateral mode)."""
     return runs("lateral_stiffness", [RATED], decay_s=0.15)

@@ -12,7 +12,7 @@ import pytest
 from jtire import batch
 from jtire.experiments.phases import Case
 
-from .conftest import GRID, SIDEWALL, ok
+from .conftest import GRID, RATED, SIDEWALL, ok
 
 # A batch vs its single runs, and 2 devices vs 1: the same per-case arithmetic, but XLA vectorizes the
 # batched program differently (reductions over nodes summed in another order under vmap, fused
@@ -172,10 +172,22 @@ def test_traced_equals_host_footprint(e01_grid, coarse_tire):
     _traced_vs_host(e01_grid, coarse_tire)
 
 
-def test_traced_equals_host_static(e01_static, e02_static, coarse_tire):
-    """E01 and E02 solved as static equilibria: the traced reductions read the same levels."""
+def test_traced_equals_host_static(e01_static, e02_static, e09_static, coarse_tire):
+    """E01, E02 and E09 solved as static equilibria: the traced reductions read the same levels."""
     _traced_vs_host(e01_static, coarse_tire)
     _traced_vs_host(e02_static, coarse_tire)
+    _traced_vs_host(e09_static, coarse_tire)
+
+
+def test_static_batch_is_its_single_runs(runs, e01_static):
+    """A static experiment's batch runs its cases one by one through the unbatched solve (a vmapped
+    Newton loop runs both branches of its conditionals): the rated case of a 2-case batch is the
+    single run bit for bit, and the lighter case deflects less."""
+    light, rated = (ok(r) for r in runs("footprint", [GRID[0], RATED]).results)
+    single = ok(e01_static.results[0])
+    assert rated.quantities == single.quantities
+    assert max_rel_diff(rated.outputs, single.outputs, 1.0)[0] == 0.0
+    assert light.quantities["deflection_m"] < rated.quantities["deflection_m"]
 
 
 def test_traced_equals_host_vertical_and_lateral(e02, e09, coarse_tire):

@@ -46,6 +46,6 @@ def test_wheel_installs_and_runs(tmp_path):
     assert "footprint: pressure 827.4 kPa" in p.stdout
     for name in ("footprint", "vertical_stiffness", "lateral_stiffness"):
         d = json.loads((work / "out" / name / "result.json").read_text())
-        # E01, E02: static equilibria (converged); E09: a transient (settled)
+        # E01, E02 and E09 (static part): static equilibria (converged)
         assert d["checks"].get("static_converged", d["checks"].get("load_settled")), name
     assert (work / "out" / "summary.csv").is_file()

@@ -113,17 +113,20 @@ def jtire(command: str, *extra) -> int:
 
 
 # ---- running experiments ----------------------------------------------------------------------------
-def test_default_run(user_dir, capsys, e01_grid):
-    """`jtire run`: E01, E02 and E09 at the rated condition, a table printed for each."""
+def test_default_run(user_dir, capsys, e01_grid, e09_static):
+    """`jtire run`: E01, E02 and E09 at the rated condition, a table printed for each; all three
+    static equilibria, and E09's k_l the in-process static run's (same program, same case)."""
     assert jtire("jtire run", *QUICK_SIM) == 0
     out = capsys.readouterr().out
     for name in ("footprint", "vertical_stiffness", "lateral_stiffness"):
         assert f"{name}: pressure 827.4 kPa, load 45.371 kN" in out
     for q in ("contact_length_m", "k_sv_N_per_m", "k_l_N_per_m"):
         assert q in out
-    # E01 and E02 are static equilibria (converged), E09 a transient (settled)
+    # E01, E02 and E09 (decay_s = 0 in the default config: the static part only) are static equilibria
     verdicts = [ln.split()[:2] for ln in out.splitlines() if ln.split()[:1] in (["settled"], ["converged"])]
-    assert verdicts == [["converged", "True"]] * 2 + [["settled", "True"]]
+    assert verdicts == [["converged", "True"]] * 3
+    k_l = float(next(ln.split()[1] for ln in out.splitlines() if ln.split()[:1] == ["k_l_N_per_m"]))
+    assert k_l == pytest.approx(ok(e09_static.results[0]).quantities["k_l_N_per_m"], rel=1e-5)  # 6 printed digits
 
 
 def test_run_footprint_out(user_dir, capsys, e01_grid, e01_static):

@@ -43,7 +43,8 @@ class Experiment(eqx.Module):
         """Whether a batch of this experiment may be split over several devices. Static solves may
         not: their Newton loops end after a different number of iterations on each device, and the
         partitioned program then deadlocks on CPU host devices (measured: a 4-case E01 static batch
-        on 2 devices hung with every thread waiting); they run vmapped on one device."""
+        on 2 devices hung with every thread waiting); `batch.run` runs them case by case, unbatched,
+        on one device (a vmapped Newton loop runs both branches of its conditionals)."""
         return getattr(self, "method", "transient") != "static"
 
     @classmethod

@@ -1,6 +1,10 @@
 """E09 lateral tire stiffness k_l and damping C_l: a lateral force at the rim of the loaded tire.
 
-Phases: inflate -> load onto the road (rim z free) -> the lateral force `force` ramped on at the rim
+Method "static" (the default when decay_s = 0, the static part only): the static load path of E01
+(`static_path`: inflation, first contact, 13 vertical levels to the load) and then the lateral
+force in two static levels (F/2, F) with rim y and z free, friction carried from level to level:
+k_l = F / y, long-term moduli. One compiled program with E01 and E02. Method "transient" (the
+default when decay_s > 0: the release decay needs a time history). Phases: inflate -> load onto the road (rim z free) -> the lateral force `force` ramped on at the rim
 centre with rim y and z free (friction holds the patch), settled: k_l = F / y_ss. Then, when
 decay_s > 0, the lateral force is ramped off in `release_ramp` with the settle damping off and the
 rim's lateral free decay gives C_l with M = m_wheel (tire + rim mass from the tire config): two
@@ -10,10 +14,13 @@ pre-load position, reported).
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 
+from .. import equilibrium as EQ
 from .. import solve
 from .. import units as U
+from ..errors import ConfigError
 from ..schema import Field
 from .base import Experiment
 from .decay import decay_about_fit, decay_checks, decay_quantities, release_branch, sample_times
@@ -22,6 +29,7 @@ from .loads import DOWN, LEFT, RIM_YZ
 from .phases import flat_road, load_branch
 from .program import check_phase, f64, phase, phase_checks, require_equilibrium
 from .result import ExperimentResult
+from .static_path import STATIC_LOADS, check_static_path, static_vertical_path
 
 
 def wheel_mass(spec) -> float:
@@ -41,7 +49,8 @@ class LateralStiffness(Experiment):
     description = "E09 lateral stiffness k_l and damping C_l (release decay)"
     schema = {"force_kN": Field(float, U.KN, 0.01, 100, 5.0, "kN"),
               "decay_s": Field(float, 1, 0, 3, 0.3, "s of free decay after the release (0: static part only)"),
-              "release_ramp_ms": Field(float, U.MS, 0, 20, 1.0, "ms (0: a step)")}
+              "release_ramp_ms": Field(float, U.MS, 0, 20, 1.0, "ms (0: a step)"),
+              "method": Field(str, default="auto", choices=("auto", "static", "transient"))}
     traced_names = ("k_l_N_per_m", "lateral_deflection_m")
 
     force: jax.Array
@@ -49,13 +58,24 @@ class LateralStiffness(Experiment):
     release_ramp: jax.Array
     with_decay: bool = eqx.field(static=True)
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)
+    method: str = eqx.field(static=True, default="transient")
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):
-        return cls(proto=proto, force=f64(table["force_kN"]), decay=f64(table["decay_s"]),
-                   release_ramp=f64(table["release_ramp_ms"]), with_decay=table["decay_s"] > 0)
+        decay, method = table["decay_s"], table["method"]
+        if method == "static" and decay > 0:
+            raise ConfigError(f"lateral_stiffness.method = \"static\" with decay_s = {decay:g}: a static solve has no "
+                              f"release decay (set decay_s = 0, or method = \"transient\" or \"auto\")")
+        if method == "auto":
+            method = "transient" if decay > 0 else "static"
+        return cls(proto=proto, force=f64(table["force_kN"]), decay=f64(decay),
+                   release_ramp=f64(table["release_ramp_ms"]), with_decay=decay > 0, method=method)
 
     def simulate(self, model, params, case):
+        if self.method == "static":
+            loads = case.load * jnp.arange(1, STATIC_LOADS + 1) / STATIC_LOADS
+            return {"static": static_vertical_path(model, params, case.pressure, loads,
+                                                   self.force * jnp.array([0.5, 1.0]))}
         extra = lateral_branches(model, case, self.proto, self.force)
         if self.with_decay:
             extra.append(lambda y, t, mem: release_branch(
@@ -65,12 +85,42 @@ class LateralStiffness(Experiment):
         return {"phases": outs, "z_road": mem["z_road"]}
 
     def traced(self, model, params, condition_cases, outputs):
-        ph = outputs[0]["phases"]
-        y_ss = abs(ph.q_end[2, 1] - ph.q_end[1, 1])
+        if self.method == "static":
+            st = outputs[0]["static"]
+            y_ss = abs(st["lateral_q"][-1, 1] - st["q"][-1, 1])
+        else:
+            ph = outputs[0]["phases"]
+            y_ss = abs(ph.q_end[2, 1] - ph.q_end[1, 1])
         return {"k_l_N_per_m": self.force / y_ss, "lateral_deflection_m": y_ss}
+
+    def _reduce_static(self, tire, condition, st):
+        load, force = condition["load_N"], float(self.force)
+        check_static_path("lateral_stiffness", st)
+        lat = np.asarray(st["lateral"])
+        EQ.check_static(st["lateral_infos"], lambda k: f"lateral_stiffness: lateral level {lat[k] / 1e3:.4g} kN")
+        fz = float(np.asarray(st["contact"])[-1, 2])
+        require_equilibrium("lateral_stiffness: vertical load", fz, load)
+        f_lat = np.asarray(st["lateral_contact"])[-1]
+        require_equilibrium("lateral_stiffness: lateral level (lateral force)", abs(float(f_lat[1])), force)
+        y_ss = float(np.asarray(st["lateral_q"])[-1, 1] - np.asarray(st["q"])[-1, 1])
+        infos = [st["infos"], st["lateral_infos"]]
+        res = max(float(np.max(np.asarray(i.residual_max) / np.asarray(i.load_scale))) for i in infos)
+        checks = {"static_converged": all(bool(np.all(np.asarray(i.converged))) for i in infos),
+                  "static_residual_max_rel": res, "contact_force_N": fz,
+                  "contact_vs_load_rel_error": abs(fz - load) / load, "contact_lateral_force_N": float(f_lat[1]),
+                  "contact_vs_lateral_rel_error": abs(abs(float(f_lat[1])) - force) / force,
+                  "vertical_deflection_m": -float(np.asarray(st["q"])[-1, 2])}
+        q = {"k_l_N_per_m": force / abs(y_ss), "lateral_deflection_m": abs(y_ss), "lateral_force_N": force}
+        sig = {"lateral_force_N": lat, "rim_y_m": np.asarray(st["lateral_q"])[:, 1] - np.asarray(st["q"])[-1, 1]}
+        info = {"method": "static", "levels": int(len(np.asarray(st["loads"])) + 2 + len(lat)),
+                "newton_iterations": int(sum(np.sum(i.iterations) for i in infos)),
+                "factorizations": int(sum(np.sum(i.factorizations) for i in infos))}
+        return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
 
     def reduce(self, tire, condition, outputs):
         out = outputs[0]
+        if self.method == "static":
+            return self._reduce_static(tire, condition, out["static"])
         model, load, force = tire.model, condition["load_N"], float(self.force)
         inf, ld, lat = (phase(out["phases"], i) for i in range(3))
         for name, ph in (("inflate", inf), ("load", ld), ("lateral", lat)):

@@ -8,25 +8,46 @@ not converge is an error naming it), and derivatives come from the implicit func
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from .. import equilibrium as EQ
 
 
-def _static_vertical_path(model, params, pressure, loads):
-    """Inflation, first contact, then static equilibrium under each vertical rim load of `loads`
-    (N, ascending). Levels: 0 inflated, 1 the touch (rim held 1 mm into the road), 2.. the loads.
-    Returns arrays per level (q, rim_force, contact, road_height, infos) and the last state y."""
-    path = EQ.static_path(model, params, pressure, EQ.vertical_levels(pressure, loads))
-    y = jax.tree_util.tree_map(lambda a: a[-1], path.ys)
-    return {"loads": loads, "q": path.q, "rim_force": path.rim_force, "contact": path.contact,
-            "road_height": path.road_height, "infos": path.infos, "y": y}
+N_LATERAL = 2  # lateral levels at the end of every static path (E09: F/2, F; E01, E02: zero force)
 
 
-# One compiled program per number of load levels (and batch shape), shared by E01 and E02 when their
-# level counts agree (the defaults do: 13 loads): a Newton solver costs ~60 s of compilation here.
-static_vertical_path = eqx.filter_jit(_static_vertical_path)
-STATIC_LOADS = 13  # E02's default: 12 levels to max_load + the stated load; E01 uses as many
+def _static_vertical_path(model, params, pressure, loads, lateral):
+    """Inflation, first contact, static equilibrium under each vertical rim load of `loads` (N,
+    ascending), then N_LATERAL lateral rim forces `lateral` (N, +y) at the last vertical load with
+    rim y and z free. Levels: 0 inflated, 1 the touch (rim held 1 mm into the road), 2.. the loads,
+    then the lateral forces. Returns arrays per vertical level (q, rim_force, contact, road_height,
+    infos), the state y after the last vertical load, and the lateral levels' q, contact, infos and
+    end state (lateral_*)."""
+    path = EQ.static_path(model, params, pressure, EQ.vertical_levels(pressure, loads),
+                          EQ.lateral_levels(pressure, loads[-1], lateral))
+    n = loads.shape[0] + 2
+    vert = jax.tree_util.tree_map(lambda a: a[:n], path)
+    lat = jax.tree_util.tree_map(lambda a: a[n:], path)
+    last = lambda ys: jax.tree_util.tree_map(lambda a: a[-1], ys)  # noqa: E731
+    return {"loads": loads, "q": vert.q, "rim_force": vert.rim_force, "contact": vert.contact,
+            "road_height": vert.road_height, "infos": vert.infos, "y": last(vert.ys),
+            "lateral": lateral, "lateral_q": lat.q, "lateral_contact": lat.contact, "lateral_infos": lat.infos,
+            "y_lateral": last(lat.ys)}
+
+
+# One compiled program per number of load levels (and batch shape), shared by E01, E02 and E09's
+# static part when their level counts agree (the defaults do: 13 vertical loads, then 2 lateral
+# levels, at zero force for E01 and E02: a converged state re-solved, no Newton step): a Newton
+# solver costs 25-60 s of compilation here, and tracing it again in a new process ~9 s.
+_static_path_jit = eqx.filter_jit(_static_vertical_path)
+STATIC_LOADS = 13  # E02's default: 12 levels to max_load + the stated load; E01 and E09 use as many
+
+
+def static_vertical_path(model, params, pressure, loads, lateral=None):
+    """`_static_vertical_path`, compiled; lateral: (N_LATERAL,) N, default zero (E01, E02)."""
+    lateral = jnp.zeros(N_LATERAL, dtype=jnp.float64) if lateral is None else jnp.asarray(lateral, dtype=jnp.float64)
+    return _static_path_jit(model, params, pressure, loads, lateral)
 
 
 def check_static_path(name, out):
