@@ -7,6 +7,7 @@ is the per-case cost after compile. Peak memory is the process's maximum residen
 
     python benchmarks/bench_batch.py                          # E01, E09, E12 on the default mesh
     python benchmarks/bench_batch.py --experiments footprint --mesh 32x5x4 --cases 4
+    python benchmarks/bench_batch.py --experiments footprint lateral_stiffness --method transient
 Take figures on a quiet machine (nothing else running) and repeat: timings here vary +-40 %.
 """
 
@@ -36,6 +37,8 @@ def child(args):
 
     nt, ns, nc = (int(v) for v in args.mesh.split("x"))
     over = [f"tire.mesh.n_theta={nt}", f"tire.mesh.n_side={ns}", f"tire.mesh.n_crown={nc}"] + EXTRA.get(args.experiment, [])
+    if args.method and args.experiment in ("footprint", "vertical_stiffness", "lateral_stiffness"):
+        over.append(f'{args.experiment}.method="{args.method}"')
     rc = load_run_config(REPO / "configs" / "experiments" / CONFIGS[args.experiment], over)
     tire = make_tire(rc.tire)
     exp = rc.experiments[0]
@@ -50,7 +53,7 @@ def child(args):
             res = batch.run(exp, tire, conds, devices=1 if args.mode == "vmap" else None)
         walls.append(time.perf_counter() - t0)
     bad = [r for r in res if isinstance(r, batch.CaseFailure)]
-    steps = [r.info.get("steps", 0) for r in res if not isinstance(r, batch.CaseFailure)]
+    steps = [r.info.get("steps", r.info.get("newton_iterations", 0)) for r in res if not isinstance(r, batch.CaseFailure)]
     peak_gib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
     print(json.dumps({"first_s": walls[0], "second_s": walls[1], "n": len(conds), "failed": len(bad),
                       "steps_mean": sum(steps) / max(len(steps), 1), "peak_GiB": peak_gib}))
@@ -62,6 +65,8 @@ def main(argv=None):
     ap.add_argument("--mesh", default="64x5x6", help="n_theta x n_side x n_crown (default: the default mesh)")
     ap.add_argument("--cases", type=int, default=9)
     ap.add_argument("--modes", nargs="+", default=["single", "vmap", "sharded"])
+    ap.add_argument("--method", default="", help="static or transient for E01/E02/E09 (default: the config's; "
+                    "static solves run case by case in every mode, so only the transient shows vmap and sharding)")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--experiment", help=argparse.SUPPRESS)
     ap.add_argument("--mode", help=argparse.SUPPRESS)
@@ -70,13 +75,13 @@ def main(argv=None):
         return child(args)
     env = dict(os.environ, JTIRE_CACHE_DIR="off")
     print(f"{args.cases}-case grid, mesh {args.mesh}; per case after compile, compile = first pass - second pass")
-    print("| experiment | mode | per case after compile [s] | vs single | compile [s] | peak memory [GiB] | steps/case |")
+    print("| experiment | mode | per case after compile [s] | vs single | compile [s] | peak memory [GiB] | steps/case (static: Newton iterations) |")
     print("|---|---|---|---|---|---|---|")
     for e in args.experiments:
         base = None
         for m in args.modes:
             cmd = [sys.executable, __file__, "--child", "--experiment", e, "--mode", m, "--mesh", args.mesh,
-                   "--cases", str(args.cases)]
+                   "--cases", str(args.cases), "--method", args.method]
             # the jtire command line turns the cache on; this script never does (JTIRE_CACHE_DIR=off for clarity)
             out = subprocess.run(cmd, capture_output=True, text=True, env=env)
             line = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]

@@ -21,7 +21,7 @@ import pytest
 from jtire.cli import main
 from jtire.config import load_run_config
 
-from .conftest import COARSE_SET, REPO, SOLVER_SET
+from .conftest import COARSE_SET, REPO, SOLVER_SET, ok
 
 README = REPO / "README.md"
 QUICK_SIM = [a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)]

@@ -181,7 +181,8 @@ class RelaxationLength(Experiment):
         t = {k: v for k, v in table.items() if k != "lateral_force_kN"}
         t["km_range_deg"] = t["kf_range_deg"]
         cor = Cornering.from_table(t, proto, tire_spec, name=cls.name)
-        lat = LateralStiffness.from_table({"force_kN": table["lateral_force_kN"], "decay_s": 0.0, "release_ramp_ms": 0.0},
+        lat = LateralStiffness.from_table({"force_kN": table["lateral_force_kN"], "decay_s": 0.0, "release_ramp_ms": 0.0,
+                                           "method": "auto"},
                                           proto, tire_spec)
         return cls(proto=proto, cornering=cor, lateral=lat)
 
