@@ -82,15 +82,14 @@ def main(argv=None):
     try:
         return int(args._module.run_cli(args, _say) or 0)
     except JtireError as e:
-        print(f"jtire {args.command}: error: {e}", file=sys.stderr)
+        _say(f"jtire {args.command}: error: {e}", err=True)
         return 2
     except OSError as e:  # an output folder that cannot be made or written, a disk full, ...
         where = f" {e.filename}" if getattr(e, "filename", None) else ""
-        print(f"jtire {args.command}: error: cannot read or write{where}: {e.strerror or e}", file=sys.stderr)
+        _say(f"jtire {args.command}: error: cannot read or write{where}: {e.strerror or e}", err=True)
         return 2
     except KeyboardInterrupt:
-        print(f"jtire {args.command}: interrupted (progress saved where the command supports it)",
-              file=sys.stderr)
+        _say(f"jtire {args.command}: interrupted (progress saved where the command supports it)", err=True)
         return 130
 
 

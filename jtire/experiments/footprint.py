@@ -22,7 +22,7 @@ from .loads import DOWN, RIM_Z
 from .phases import FAR, flat_road, inflate_branch, load_branch
 from .program import check_phase, last_valid, phase, phase_checks, require_equilibrium, run_plan
 from .result import ExperimentResult
-from .static_path import STATIC_LOADS, check_static_path, static_vertical_path
+from .static_path import STATIC_LOADS, check_static_path, static_summary, static_vertical_path
 
 
 def loaded_plan(model, params, case, proto, load, n_save, extra=(), ramp=None, mem=None):
@@ -76,15 +76,10 @@ class Footprint(Experiment):
         if self.method == "static":
             st = out["static"]
             check_static_path("footprint", st)
-            infos = st["infos"]
             fz, fy = float(np.asarray(st["contact"])[-1, 2]), float(np.asarray(st["contact"])[-1, 1])
             err = abs(fz - load) / load
-            res = np.asarray(infos.residual_max) / np.asarray(infos.load_scale)
-            checks = {"static_converged": bool(np.all(np.asarray(infos.converged))),
-                      "static_residual_max_rel": float(res.max())}
-            info = {"method": "static", "levels": int(len(np.asarray(st["loads"])) + 2),
-                    "newton_iterations": int(np.sum(infos.iterations)),
-                    "factorizations": int(np.sum(infos.factorizations))}
+            checks, info = static_summary(st["infos"])
+            info["levels"] = int(len(np.asarray(st["loads"])) + 2)
         else:
             inf, ld = phase(out["phases"], 0), phase(out["phases"], 1)
             check_phase("inflate", inf, model)

@@ -3,8 +3,10 @@
 Method "static" (the default when decay_s = 0, the static part only): the static load path of E01
 (`static_path`: inflation, first contact, 13 vertical levels to the load) and then the lateral
 force in two static levels (F/2, F) with rim y and z free, friction carried from level to level:
-k_l = F / y, long-term moduli. One compiled program with E01 and E02. Method "transient" (the
-default when decay_s > 0: the release decay needs a time history). Phases: inflate -> load onto the road (rim z free) -> the lateral force `force` ramped on at the rim
+k_l = F / y, long-term moduli. One compiled program with E01 and E02.
+
+Method "transient" (the default when decay_s > 0: the release decay needs a time history). Phases:
+inflate -> load onto the road (rim z free) -> the lateral force `force` ramped on at the rim
 centre with rim y and z free (friction holds the patch), settled: k_l = F / y_ss. Then, when
 decay_s > 0, the lateral force is ramped off in `release_ramp` with the settle damping off and the
 rim's lateral free decay gives C_l with M = m_wheel (tire + rim mass from the tire config): two
@@ -29,7 +31,13 @@ from .loads import DOWN, LEFT, RIM_YZ
 from .phases import flat_road, load_branch
 from .program import check_phase, f64, phase, phase_checks, require_equilibrium
 from .result import ExperimentResult
-from .static_path import STATIC_LOADS, check_static_path, static_vertical_path
+from .static_path import STATIC_LOADS, check_static_path, static_summary, static_vertical_path
+
+
+def _static_y(st):
+    """The rim's lateral travel (m, +y) from the last vertical level to the last lateral level of a
+    static path (traceable; numpy on the host)."""
+    return st["lateral_q"][-1, 1] - st["q"][-1, 1]
 
 
 def wheel_mass(spec) -> float:
@@ -86,8 +94,7 @@ class LateralStiffness(Experiment):
 
     def traced(self, model, params, condition_cases, outputs):
         if self.method == "static":
-            st = outputs[0]["static"]
-            y_ss = abs(st["lateral_q"][-1, 1] - st["q"][-1, 1])
+            y_ss = abs(_static_y(outputs[0]["static"]))
         else:
             ph = outputs[0]["phases"]
             y_ss = abs(ph.q_end[2, 1] - ph.q_end[1, 1])
@@ -102,19 +109,15 @@ class LateralStiffness(Experiment):
         require_equilibrium("lateral_stiffness: vertical load", fz, load)
         f_lat = np.asarray(st["lateral_contact"])[-1]
         require_equilibrium("lateral_stiffness: lateral level (lateral force)", abs(float(f_lat[1])), force)
-        y_ss = float(np.asarray(st["lateral_q"])[-1, 1] - np.asarray(st["q"])[-1, 1])
-        infos = [st["infos"], st["lateral_infos"]]
-        res = max(float(np.max(np.asarray(i.residual_max) / np.asarray(i.load_scale))) for i in infos)
-        checks = {"static_converged": all(bool(np.all(np.asarray(i.converged))) for i in infos),
-                  "static_residual_max_rel": res, "contact_force_N": fz,
-                  "contact_vs_load_rel_error": abs(fz - load) / load, "contact_lateral_force_N": float(f_lat[1]),
-                  "contact_vs_lateral_rel_error": abs(abs(float(f_lat[1])) - force) / force,
-                  "vertical_deflection_m": -float(np.asarray(st["q"])[-1, 2])}
+        y_ss = float(_static_y(st))
+        checks, info = static_summary(st["infos"], st["lateral_infos"])
+        checks |= {"contact_force_N": fz, "contact_vs_load_rel_error": abs(fz - load) / load,
+                   "contact_lateral_force_N": float(f_lat[1]),
+                   "contact_vs_lateral_rel_error": abs(abs(float(f_lat[1])) - force) / force,
+                   "vertical_deflection_m": -float(np.asarray(st["q"])[-1, 2])}
         q = {"k_l_N_per_m": force / abs(y_ss), "lateral_deflection_m": abs(y_ss), "lateral_force_N": force}
         sig = {"lateral_force_N": lat, "rim_y_m": np.asarray(st["lateral_q"])[:, 1] - np.asarray(st["q"])[-1, 1]}
-        info = {"method": "static", "levels": int(len(np.asarray(st["loads"])) + 2 + len(lat)),
-                "newton_iterations": int(sum(np.sum(i.iterations) for i in infos)),
-                "factorizations": int(sum(np.sum(i.factorizations) for i in infos))}
+        info["levels"] = int(len(np.asarray(st["loads"])) + 2 + len(lat))
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
 
     def reduce(self, tire, condition, outputs):

@@ -27,7 +27,7 @@ from .base import Experiment
 from .footprint import contact_check, loaded_plan, run_info
 from .program import check_phase, f64, phase, phase_checks, require_equilibrium
 from .result import ExperimentResult
-from .static_path import STATIC_LOADS, check_static_path, static_vertical_path
+from .static_path import STATIC_LOADS, check_static_path, static_summary, static_vertical_path
 
 
 class VerticalStiffness(Experiment):
@@ -103,7 +103,6 @@ class VerticalStiffness(Experiment):
         loads = np.asarray(out["loads"])
         stated = self._stated(condition)
         check_static_path("vertical_stiffness", out)
-        infos = out["infos"]
         defl = -np.asarray(out["q"])[2:, 2]
         fz = np.asarray(out["contact"])[2:, 2]
         k = int(np.argmin(np.abs(loads - stated)))
@@ -114,17 +113,13 @@ class VerticalStiffness(Experiment):
                               f"the static load levels (needs 3; raise n_levels)")
         fit = signals.linear_slope(defl[sel], loads[sel])
         require_equilibrium("vertical_stiffness: at the maximum load", float(fz[-1]), float(loads[-1]))
-        res = np.asarray(infos.residual_max) / np.asarray(infos.load_scale)
-        checks = {"static_converged": bool(np.all(np.asarray(infos.converged))),
-                  "static_residual_max_rel": float(res.max()),
-                  "contact_vs_load_max_rel_error": float(np.max(np.abs(fz - loads) / loads))}
+        checks, info = static_summary(out["infos"])
+        checks["contact_vs_load_max_rel_error"] = float(np.max(np.abs(fz - loads) / loads))
         q = {"k_sv_N_per_m": stated / defl[k], "k_sv_fit_N_per_m": fit.slope, "deflection_m": float(defl[k]),
              "stated_load_N": stated, "max_load_N": float(loads[-1]), "fit_r2": fit.r2,
              "settled_deflection_at_max_load_m": float(defl[-1])}
         sig = {"load_N": loads, "contact_force_N": fz, "deflection_m": defl}
-        info = {"method": "static", "newton_iterations": int(np.sum(infos.iterations)),
-                "factorizations": int(np.sum(infos.factorizations)), "krylov_iterations": int(np.sum(infos.krylov)),
-                "levels": int(len(loads) + 2)}
+        info["levels"] = int(len(loads) + 2)
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
 
     def traced(self, model, params, condition_cases, outputs):
