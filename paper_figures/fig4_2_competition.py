@@ -28,10 +28,10 @@ from jtire.calibration.competition import (  # noqa: E402
     CompetitionSpec,
     fingerprint,
     load_config,
-    plot_progression,
     run_competition,
     soil_objective,
 )
+from jtire.calibration.competition_report import plot_progression  # noqa: E402
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "calibration" / "soil_competition.toml"
 

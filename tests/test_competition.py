@@ -10,15 +10,12 @@ import pytest
 import jtire  # noqa: F401  (float64)
 from jtire.calibration.competition import (
     CompetitionSpec,
-    calls_to_reach,
     fingerprint,
-    format_table,
     load_config,
     run_competition,
     standin_objective,
-    summarize,
-    write_outputs,
 )
+from jtire.calibration.competition_report import calls_to_reach, format_table, summarize, write_outputs
 from jtire.calibration.history import OptimizeResult
 from jtire.errors import ConfigError
 

@@ -3,9 +3,9 @@
 
 from pathlib import Path
 
-from ..calibration.competition import (QUICK_BUDGET, QUICK_SEEDS, CompetitionSpec, fingerprint, format_table,
-                                       load_config, run_competition, soil_objective, standin_objective,
-                                       write_outputs)
+from ..calibration.competition import (QUICK_BUDGET, QUICK_SEEDS, CompetitionSpec, fingerprint, load_config,
+                                       run_competition, soil_objective, standin_objective)
+from ..calibration.competition_report import format_table, write_outputs
 
 
 def add_arguments(parser):
