@@ -8,6 +8,7 @@ is the per-case cost after compile. Peak memory is the process's maximum residen
     python benchmarks/bench_batch.py                          # E01, E09, E12 on the default mesh
     python benchmarks/bench_batch.py --experiments footprint --mesh 32x5x4 --cases 4
     python benchmarks/bench_batch.py --experiments footprint lateral_stiffness --method transient
+    python benchmarks/bench_batch.py --experiments rolling_resistance --one-core   # where the time goes
 Take figures on a quiet machine (nothing else running) and repeat: timings here vary +-40 %.
 """
 
@@ -46,17 +47,21 @@ def child(args):
     conds = [{"pressure_Pa": p * U.PSI, "load_N": w * U.G0} for p in (70.0, 120.0, 150.0) for w in loads][: args.cases]
     walls = []
     for _ in range(2):
+        r0 = resource.getrusage(resource.RUSAGE_SELF)
         t0 = time.perf_counter()
         if args.mode == "single":
             res = [batch.run(exp, tire, [c], devices=1)[0] for c in conds]
         else:
             res = batch.run(exp, tire, conds, devices=1 if args.mode == "vmap" else None)
         walls.append(time.perf_counter() - t0)
+        r1 = resource.getrusage(resource.RUSAGE_SELF)
+        # cores busy on average during the pass: CPU time (user + system, all threads) / wall time
+        cores = (r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime) / walls[-1]
     bad = [r for r in res if isinstance(r, batch.CaseFailure)]
     steps = [r.info.get("steps", r.info.get("newton_iterations", 0)) for r in res if not isinstance(r, batch.CaseFailure)]
     peak_gib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
     print(json.dumps({"first_s": walls[0], "second_s": walls[1], "n": len(conds), "failed": len(bad),
-                      "steps_mean": sum(steps) / max(len(steps), 1), "peak_GiB": peak_gib}))
+                      "steps_mean": sum(steps) / max(len(steps), 1), "peak_GiB": peak_gib, "cores_busy": cores}))
 
 
 def main(argv=None):
@@ -67,6 +72,9 @@ def main(argv=None):
     ap.add_argument("--modes", nargs="+", default=["single", "vmap", "sharded"])
     ap.add_argument("--method", default="", help="static or transient for E01/E02/E09 (default: the config's; "
                     "static solves run case by case in every mode, so only the transient shows vmap and sharding)")
+    ap.add_argument("--one-core", action="store_true",
+                    help="also run each mode pinned to one core (Linux `taskset -c 0`): how much of the second core a "
+                         "single case already uses, and what vmap gains on one core")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--experiment", help=argparse.SUPPRESS)
     ap.add_argument("--mode", help=argparse.SUPPRESS)
@@ -75,25 +83,30 @@ def main(argv=None):
         return child(args)
     env = dict(os.environ, JTIRE_CACHE_DIR="off")
     print(f"{args.cases}-case grid, mesh {args.mesh}; per case after compile, compile = first pass - second pass")
-    print("| experiment | mode | per case after compile [s] | vs single | compile [s] | peak memory [GiB] | steps/case (static: Newton iterations) |")
-    print("|---|---|---|---|---|---|---|")
-    for e in args.experiments:
-        base = None
-        for m in args.modes:
-            cmd = [sys.executable, __file__, "--child", "--experiment", e, "--mode", m, "--mesh", args.mesh,
-                   "--cases", str(args.cases), "--method", args.method]
-            # the jtire command line turns the cache on; this script never does (JTIRE_CACHE_DIR=off for clarity)
-            out = subprocess.run(cmd, capture_output=True, text=True, env=env)
-            line = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]
-            if out.returncode or not line:
-                print(f"| {e} | {m} | failed: {out.stderr.strip().splitlines()[-1] if out.stderr.strip() else out.returncode} |")
-                continue
-            r = json.loads(line[-1])
-            per = r["second_s"] / r["n"]
-            base = per if m == "single" else base
-            ratio = f"{per / base:.2f}" if base else "-"
-            print(f"| {e} | {m} | {per:.2f} | {ratio} | {r['first_s'] - r['second_s']:.0f} | {r['peak_GiB']:.2f} | "
-                  f"{r['steps_mean']:.0f} |", flush=True)
+    print("| experiment | mode | per case after compile [s] | vs single | compile [s] | peak memory [GiB] | "
+          "steps/case (static: Newton iterations) | cores busy after compile |")
+    print("|---|---|---|---|---|---|---|---|")
+    runs = [(e, m, pin) for e in args.experiments for pin in ([False, True] if args.one_core else [False])
+            for m in args.modes if not (pin and m == "sharded")]  # sharded over 2 devices on 1 core: nothing to learn
+    base = {}
+    for e, m, pin in runs:
+        cmd = (["taskset", "-c", "0"] if pin else []) + [
+            sys.executable, __file__, "--child", "--experiment", e, "--mode", m, "--mesh", args.mesh,
+            "--cases", str(args.cases), "--method", args.method]
+        # the jtire command line turns the cache on; this script never does (JTIRE_CACHE_DIR=off for clarity)
+        out = subprocess.run(cmd, capture_output=True, text=True, env=env)
+        line = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]
+        m_name = m + (" (1 core)" if pin else "")
+        if out.returncode or not line:
+            print(f"| {e} | {m_name} | failed: {out.stderr.strip().splitlines()[-1] if out.stderr.strip() else out.returncode} |")
+            continue
+        r = json.loads(line[-1])
+        per = r["second_s"] / r["n"]
+        if m == "single" and not pin:
+            base[e] = per
+        ratio = f"{per / base[e]:.2f}" if e in base else "-"
+        print(f"| {e} | {m_name} | {per:.2f} | {ratio} | {r['first_s'] - r['second_s']:.0f} | {r['peak_GiB']:.2f} | "
+              f"{r['steps_mean']:.0f} | {r.get('cores_busy', float('nan')):.2f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ from . import arsm, baselines
 from ..schema import Field, validate
 from ..config import read_toml
 from ..errors import ConfigError
-from ..io import atomic_write_json
+from ..io import atomic_write_json, remove_stale_temps
 
 __all__ = ["METHODS", "CompetitionSpec", "load_config", "soil_objective", "standin_objective",
            "fingerprint", "run_competition"]  # the results: competition_report.py
@@ -256,6 +256,7 @@ def _check_out_dir(out_dir, fingerprint):
                           if old.get(k) != fingerprint.get(k))
             raise ConfigError(f"--out {out_dir}: holds a competition with other {', '.join(keys)}; "
                               "use another folder")
+        remove_stale_temps(out_dir)  # a resume: drop the temporary files of a write a kill interrupted
     else:
         atomic_write_json(path, fingerprint)
 

@@ -31,7 +31,7 @@ from .history import BudgetExhausted
 from .simulator import check_batch
 from .targets import percent_errors
 from ..errors import ConfigError
-from ..io import append_jsonl, atomic_write_json, atomic_write_text, read_jsonl
+from ..io import append_jsonl, atomic_write_json, atomic_write_text, read_jsonl, remove_stale_temps
 
 __all__ = ["RunLog", "check_fingerprint", "BudgetExhausted", "load_records", "records_arrays"]
 
@@ -49,6 +49,7 @@ def check_fingerprint(out_dir, fingerprint: dict, name: str = "fingerprint.json"
             keys = sorted(k for k in set(old) | set(fingerprint) if old.get(k) != fingerprint.get(k))
             raise ConfigError(f"--out {out_dir}: holds a run made with other {', '.join(keys)}; "
                               "use another folder (or delete it to start again)")
+        remove_stale_temps(out_dir)  # a resume: drop the temporary files of a write a kill interrupted
     else:
         atomic_write_json(path, fingerprint)
 

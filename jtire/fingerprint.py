@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ConfigError
-from .io import atomic_write_json
+from .io import atomic_write_json, remove_stale_temps
 
 
 def plain(x):
@@ -55,8 +55,9 @@ def _diff(a, b, prefix=""):
 def claim_folder(folder, settings: dict, name: str = "settings.json") -> bool:
     """Write `settings` into folder/name, or check that the folder's are the same.
 
-    Returns True when the folder already held these settings (a resume). Raises ConfigError naming
-    the differing fields when it holds other settings.
+    Returns True when the folder already held these settings (a resume: the temporary files of a
+    write that a kill interrupted are removed). Raises ConfigError naming the differing fields when
+    it holds other settings.
     """
     folder = Path(folder)
     path = folder / name
@@ -71,6 +72,7 @@ def claim_folder(folder, settings: dict, name: str = "settings.json") -> bool:
             shown = ", ".join(keys[:6]) + (f" and {len(keys) - 6} more" if len(keys) > 6 else "")
             raise ConfigError(f"{folder}: holds results made with other settings (differs in {shown}); "
                               f"use another output folder")
+        remove_stale_temps(folder)
         return True
     atomic_write_json(path, settings)
     return False

@@ -49,6 +49,18 @@ def atomic_write_text(path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode())
 
 
+def remove_stale_temps(folder) -> int:
+    """Delete the temporary files (`.NAME.XXXXXXXX.tmp`, as `atomic_write_bytes` names them) that a
+    process killed in the middle of a write left anywhere under `folder`. Called when a job resumes
+    into its folder (one job per folder at a time). Returns how many were removed."""
+    n = 0
+    for p in Path(folder).rglob(".*.tmp"):
+        if p.is_file():
+            p.unlink(missing_ok=True)
+            n += 1
+    return n
+
+
 def atomic_savefig(fig, path, dpi: int = 120) -> Path:
     """Save a matplotlib figure atomically (format from the suffix, e.g. .png) and close it."""
     import matplotlib.pyplot as plt

@@ -35,6 +35,24 @@ def test_claim_folder_resumes_same_and_refuses_other_settings(tmp_path):
         claim_folder(tmp_path, s)
 
 
+def test_resume_removes_the_temporary_files_a_kill_left(tmp_path):
+    """A kill between mkstemp and the rename leaves `.NAME.XXXXXXXX.tmp`: the resume removes those (and
+    only those), so the finished folder is the uninterrupted run's; a refused rerun touches nothing."""
+    s = {"jtire": "0.1.0"}
+    claim_folder(tmp_path, s)
+    case = tmp_path / "cases" / "000_p120psi"
+    case.mkdir(parents=True)
+    (case / ".result.json.k3j2x9_a.tmp").write_text('{"quanti')
+    (case / "signals.csv").write_text("t\n0\n")
+    (tmp_path / ".hidden_user_file").write_text("mine")
+    with pytest.raises(ConfigError):
+        claim_folder(tmp_path, {"jtire": "0.2.0"})
+    assert (case / ".result.json.k3j2x9_a.tmp").exists()
+    assert claim_folder(tmp_path, s) is True
+    assert sorted(p.name for p in case.iterdir()) == ["signals.csv"]
+    assert (tmp_path / ".hidden_user_file").read_text() == "mine"
+
+
 def test_cache_folder_rules(monkeypatch, tmp_path):
     monkeypatch.setenv("JTIRE_CACHE_DIR", str(tmp_path / "c"))
     assert cache.cache_dir() == tmp_path / "c"

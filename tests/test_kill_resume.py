@@ -2,13 +2,16 @@
 ones an uninterrupted run writes, with nothing finished computed twice.
 
 For `jtire compete --quick` (stand-in objective), `jtire calibrate --standin` and `jtire sample
---check --standin` (no shell model needed): a reference run goes uninterrupted; another run into
+--check --standin` (no shell model needed), and `jtire sweep` and `jtire characterize` (the shell model on
+the coarse ring, its static experiments: E01, E02 and E09's static part, solved case by case, so a kill
+can land between the cases of one experiment): a reference run goes uninterrupted; another run into
 a fresh folder is killed (SIGKILL, the signal nobody can catch) at a seeded random point that lands
 mid-run -- after a random number of finished records (or progress lines), plus a random delay --
 then rerun to the end. Checks:
 
 - every result file is byte-identical to the reference, except the recorded wall times (removed
-  before comparing: their values are timings, not results) and the HDF5 chain, whose arrays (chain,
+  before comparing: their values are timings, not results; a case's result.json is compared without
+  its `wall_s_per_case_in_batch`, everything else in it byte for byte as JSON values) and the HDF5 chain, whose arrays (chain,
   log-probabilities, acceptance counts, random state) are compared instead of its bytes (HDF5's
   layout depends on the order its writes happened in);
 - histories have no duplicate record: every call/evaluation index appears once, in order; and the
@@ -30,14 +33,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from .conftest import REPO
+from .conftest import COARSE_SET, REPO, SOLVER_SET
 
 CAL = REPO / "configs" / "calibration"
 ENTRY = ["-c", "import sys; from jtire.cli import main; sys.exit(main())"]
 TIMEOUT = 600  # s: an uninterrupted run takes 5-40 s here; a hung one fails the test
 # wall times are recorded for the user, not results: removed before comparing records and files
-WALL_KEYS = {"wall_s", "batch_wall_s", "simulator_wall_s"}
+WALL_KEYS = {"wall_s", "batch_wall_s", "simulator_wall_s", "wall_s_per_case_in_batch"}
 SAMPLE_STEPS = 2000
+QUICK = [a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)]
+# 2 loads x 2 pressures of the static experiments: 12 cases, about 1-2 s each after the (cached) compile
+GRID = ["--set", "grid.loads_kg=[2312.5, 4625.0]", "--set", "grid.pressures_psi=[70.0, 120.0]",
+        "--set", "grid.rated_load_kg=4625.0", "--set", "grid.rated_pressure_psi=120.0"]
+STATIC = ["--set", 'experiments=["footprint", "vertical_stiffness", "lateral_stiffness"]',
+          "--set", "lateral_stiffness.decay_s=0.0"]
 
 
 def _argv(kind, out, history=None):
@@ -46,6 +55,13 @@ def _argv(kind, out, history=None):
                 "--out", str(out)]
     if kind == "calibrate":
         return ["calibrate", str(CAL / "study.toml"), "--standin", "--out", str(out)]
+    if kind == "characterize":
+        return ["characterize", str(REPO / "configs" / "characterize.toml"), *STATIC, *GRID, *QUICK, "--no-validate",
+                "--out", str(out)]
+    if kind == "sweep":
+        return ["sweep", str(REPO / "configs" / "experiments" / "vertical_stiffness.toml"), *QUICK,
+                "--set", "sweep.loads_kg=[2312.5, 4625.0, 6937.5]", "--set", "sweep.pressures_psi=[70.0, 120.0]",
+                "--out", str(out)]
     # a short chain (2000 steps in chunks of 50) on the linear emulator: ~1 min
     return ["sample", str(CAL / "posterior.toml"), "--history", str(history), "--standin", "--check",
             "--out", str(out), "--set", f"sampler.max_steps={SAMPLE_STEPS}", "--set", "sampler.check_every=50",
@@ -82,6 +98,8 @@ def _progress(kind, out, log):
         return sum(_complete_lines(p) for p in (Path(out) / "standin" / "histories").glob("*.jsonl"))
     if kind == "calibrate":
         return _complete_lines(Path(out) / "history.jsonl")
+    if kind in ("characterize", "sweep"):  # finished cases (a case folder's result.json is written last)
+        return len(list(Path(out).glob("**/cases/*/result.json")))
     if not (Path(out) / "fingerprint.json").exists():
         return -1  # not started: the emulator is fitted right after the fingerprint is written
     return Path(log).read_text(errors="replace").count(" steps, max tau")
@@ -168,6 +186,8 @@ def assert_same_results(kind, ref, got):
             for k in ("chain", "log_prob", "accepted"):
                 np.testing.assert_array_equal(cb[k], ca[k], err_msg=k)
             assert all(np.array_equal(x, y) for x, y in zip(ca["random_state"], cb["random_state"]))
+        elif rel.name == "result.json" and kind in ("characterize", "sweep"):
+            assert _strip_walls(json.loads(b.read_text())) == _strip_walls(json.loads(a.read_text())), rel
         elif rel.name == "summary.json" and kind == "calibrate":
             assert _strip_walls(json.loads(b.read_text())) == _strip_walls(json.loads(a.read_text()))
         else:
@@ -220,6 +240,7 @@ def _kills(kind, references, calibration_history, tmp_path, n_kills, seed):
         killed += _kill_at(kind, argv, out, log, target, delay)
         if kind == "sample":  # the chain length the killed run had reported saved
             saved_steps = max(saved_steps, _printed_steps(log))
+    done_before = _progress(kind, out, log)
     Path(log).write_text("")
     rc = _run(argv, log)
     assert rc == (1 if kind == "sample" else 0), Path(log).read_text()[-2000:]
@@ -227,20 +248,26 @@ def _kills(kind, references, calibration_history, tmp_path, n_kills, seed):
         # the resumed run says how many steps it ran itself: none of those reported saved before
         new = int(Path(log).read_text().split(" new)")[0].rsplit("(", 1)[1])
         assert new <= SAMPLE_STEPS - saved_steps, (new, saved_steps)
+    elif kind in ("characterize", "sweep"):  # the cases the killed runs finished were not run again
+        assert _progress(kind, out, log) == total
+        if done_before:
+            assert f"{done_before} of {total} cases already done" in Path(log).read_text(), Path(log).read_text()[-2000:]
     else:  # each record once: those finished before the kill were replayed, not redone
         assert _progress(kind, out, log) == total
     assert_same_results(kind, ref, out)
     return killed
 
 
-@pytest.mark.parametrize("kind,seed", [("compete", 11), ("calibrate", 12), ("sample", 13)])
+# (the quick kill of `jtire sweep` is tests/test_sweep.py's; its soak is here)
+@pytest.mark.parametrize("kind,seed", [("compete", 11), ("calibrate", 12), ("sample", 13), ("characterize", 14)])
 def test_one_kill_then_resume_gives_the_uninterrupted_files(kind, seed, references, calibration_history, tmp_path):
     killed = _kills(kind, references, calibration_history, tmp_path, 1, seed)
     assert killed == 1, "the kill landed after the run had finished: it tested nothing"
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind,seed", [("compete", 21), ("calibrate", 22), ("sample", 23)])
+@pytest.mark.parametrize("kind,seed", [("compete", 21), ("calibrate", 22), ("sample", 23), ("characterize", 24),
+                                       ("sweep", 25)])
 def test_ten_kills_in_a_row_then_resume(kind, seed, references, calibration_history, tmp_path):
     killed = _kills(kind, references, calibration_history, tmp_path, 10, seed)
     assert killed >= 8, f"only {killed} of 10 kills landed mid-run"
