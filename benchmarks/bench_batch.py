@@ -51,6 +51,10 @@ def child(args):
         t0 = time.perf_counter()
         if args.mode == "single":
             res = [batch.run(exp, tire, [c], devices=1)[0] for c in conds]
+        elif args.mode == "sharded-1":  # one case per device at a time: batches of the device count
+            import jax
+
+            res = batch.run(exp, tire, conds, batch=len(jax.devices()))
         else:
             res = batch.run(exp, tire, conds, devices=1 if args.mode == "vmap" else None)
         walls.append(time.perf_counter() - t0)
@@ -69,7 +73,9 @@ def main(argv=None):
     ap.add_argument("--experiments", nargs="+", default=["footprint", "lateral_stiffness", "rolling_resistance"])
     ap.add_argument("--mesh", default="64x5x6", help="n_theta x n_side x n_crown (default: the default mesh)")
     ap.add_argument("--cases", type=int, default=9)
-    ap.add_argument("--modes", nargs="+", default=["single", "vmap", "sharded"])
+    ap.add_argument("--modes", nargs="+", default=["single", "vmap", "sharded", "sharded-1"],
+                    help="single: one case at a time; vmap: all cases vmapped on one device; sharded: all cases "
+                         "vmapped and split over the devices; sharded-1: batches of one case per device")
     ap.add_argument("--method", default="", help="static or transient for E01/E02/E09 (default: the config's; "
                     "static solves run case by case in every mode, so only the transient shows vmap and sharding)")
     ap.add_argument("--one-core", action="store_true",
@@ -87,7 +93,7 @@ def main(argv=None):
           "steps/case (static: Newton iterations) | cores busy after compile |")
     print("|---|---|---|---|---|---|---|---|")
     runs = [(e, m, pin) for e in args.experiments for pin in ([False, True] if args.one_core else [False])
-            for m in args.modes if not (pin and m == "sharded")]  # sharded over 2 devices on 1 core: nothing to learn
+            for m in args.modes if not (pin and m.startswith("sharded"))]  # sharded over 2 devices on 1 core: nothing to learn
     base = {}
     for e, m, pin in runs:
         cmd = (["taskset", "-c", "0"] if pin else []) + [

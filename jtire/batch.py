@@ -140,6 +140,8 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     dts = stable_steps(model, [plist[i] for i, _ in flat], [c["pressure_Pa"] for _, c in flat],
                        float(exp.proto.settle_damping))
     size = len(flat) if batch <= 0 else min(batch, len(flat))
+    if not exp.shardable:  # static solves run case by case anyway: each case is its own batch, so it is
+        size = 1  # reduced and handed to on_result (saved) the moment it finishes
     n_dev = n_devices_for(size, devices) if exp.shardable else 1
     size = -(-size // n_dev) * n_dev  # a multiple of the device count
     pending = {}

@@ -42,7 +42,8 @@ TIMEOUT = 600  # s: an uninterrupted run takes 5-40 s here; a hung one fails the
 WALL_KEYS = {"wall_s", "batch_wall_s", "simulator_wall_s", "wall_s_per_case_in_batch"}
 SAMPLE_STEPS = 2000
 QUICK = [a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)]
-# 2 loads x 2 pressures of the static experiments: 12 cases, about 1-2 s each after the (cached) compile
+# 2 loads x 2 pressures of the 3 static experiments: 12 cases, about 1-2 s each after the (cached) compile, each
+# saved as it finishes (static solves run case by case): the soak's 10 kills each land between two of them
 GRID = ["--set", "grid.loads_kg=[2312.5, 4625.0]", "--set", "grid.pressures_psi=[70.0, 120.0]",
         "--set", "grid.rated_load_kg=4625.0", "--set", "grid.rated_pressure_psi=120.0"]
 STATIC = ["--set", 'experiments=["footprint", "vertical_stiffness", "lateral_stiffness"]',
@@ -60,7 +61,8 @@ def _argv(kind, out, history=None):
                 "--out", str(out)]
     if kind == "sweep":
         return ["sweep", str(REPO / "configs" / "experiments" / "vertical_stiffness.toml"), *QUICK,
-                "--set", "sweep.loads_kg=[2312.5, 4625.0, 6937.5]", "--set", "sweep.pressures_psi=[70.0, 120.0]",
+                # 12 cases: the soak's 10 kills each land between two of them
+                "--set", "sweep.loads_kg=[2312.5, 3500.0, 4625.0, 5500.0]", "--set", "sweep.pressures_psi=[70.0, 120.0, 150.0]",
                 "--out", str(out)]
     # a short chain (2000 steps in chunks of 50) on the linear emulator: ~1 min
     return ["sample", str(CAL / "posterior.toml"), "--history", str(history), "--standin", "--check",
