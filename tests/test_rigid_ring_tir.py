@@ -146,3 +146,34 @@ def test_compare_verdicts_and_figure(tmp_path):
     p = validation.validation_figure({"drop": (t, np.sin(t))}, {"drop": (t, np.cos(t)), "step_5": (t, t)},
                                      tmp_path / "v.png")
     assert p.stat().st_size > 1000
+
+
+@pytest.mark.parametrize("fs", [500.0, 4000.0])
+def test_shell_drop_metrics_search_the_belt_band_below_nyquist(tmp_path, fs):
+    """The shell's drop, read from a characterization case folder: a default-mesh drop is saved at
+    500 Hz, so the belt-mode band (40-300 Hz) is cut at fs/2 = 250 Hz (a characterize on the default
+    mesh once failed here after 43 min of grid). A synthetic contact force with a 120 Hz ring-down
+    on a 2 Hz bounce: the peak found within 1 % (the padded spectrum's resolution is 0.01 Hz; the
+    Hann window and the short record bias an interpolated peak by well under that)."""
+    import json
+
+    from jtire import units as U
+    from jtire import validate
+
+    load, p = 4625.0 * U.G0, 120.0 * U.PSI
+    t = np.arange(0.0, 1.0, 1.0 / fs)
+    touch = t >= 0.05
+    tau = t - 0.05
+    fz = np.where(touch, load * (1 + 0.3 * np.exp(-3 * tau) * np.cos(2 * np.pi * 2 * tau))
+                  + 2e3 * np.exp(-4 * tau) * np.sin(2 * np.pi * 120.0 * tau), 0.0)
+    case = tmp_path / "drop_test" / "cases" / "000"
+    case.mkdir(parents=True)
+    (case / "result.json").write_text(json.dumps({
+        "condition": {"load_N": load, "pressure_Pa": p},
+        "quantities": {"static_deflection_m": 0.035, "f_d_fit_Hz": 2.0, "xi_fit": 0.1}}))
+    rows = ["time_s,contact_force_z_N,rim_z_m"] + [f"{a:.17g},{b:.17g},{-1e-3 * b / load:.17g}" for a, b in zip(t, fz)]
+    (case / "signals.csv").write_text("\n".join(rows) + "\n")
+    m, sig = validate.shell_metrics(tmp_path, load, p)
+    assert sig["drop_band_Hz"] == pytest.approx((40.0, min(300.0, fs / 2)), rel=1e-9)
+    assert m["drop.belt_mode_Hz"] == pytest.approx(120.0, rel=0.01)
+    assert validate.belt_band(np.arange(0, 1, 1 / 50.0)) is None  # 25 Hz Nyquist: no band left
