@@ -73,6 +73,9 @@ class ShellSimulator(Simulator):
                 self.groups.append({"key": key, "exp": exp, "targets": [(j, t)]})
         self.cost_forward_equivalents = {"evaluate": 1.0, "jacobian": float("nan")}
         self.last_wall = {}
+        # on_case(label, n_done, n_total): called as each case of an evaluation finishes (the CLI
+        # draws a progress bar with it: an initial ARSM batch is ~40 default-mesh cases, minutes)
+        self.on_case = None
 
     def fingerprint(self) -> dict:
         from ..fingerprint import code_version, plain
@@ -90,12 +93,20 @@ class ShellSimulator(Simulator):
         n = len(thetas)
         out = np.full((n, len(self.response_names)), np.nan)
         plist = [self.params(th) for th in thetas]
+        total = n * sum(len(g["targets"]) for g in self.groups)
+        done = [0]
+
+        def count(*_):
+            done[0] += 1
+            if self.on_case is not None:
+                self.on_case(f"{n} parameter set{'s' * (n > 1)}", done[0], total)
+
         for g in self.groups:
             exp, tg = g["exp"], g["targets"]
             conds = [t.condition for _, t in tg]
             t0 = time.perf_counter()
             res = batch.run(exp, self.tire, [c for _ in range(n) for c in conds],
-                            params_list=[p for p in plist for _ in conds], devices=self.devices)
+                            params_list=[p for p in plist for _ in conds], devices=self.devices, on_result=count)
             self.last_wall[exp.name] = time.perf_counter() - t0
             for i in range(n):
                 for k, (j, t) in enumerate(tg):

@@ -15,6 +15,8 @@ import dataclasses
 import json
 from pathlib import Path
 
+import numpy as np
+
 from . import batch
 from . import units as U
 from .config import parse_solver, read_toml, tire_from_dict, validate_table
@@ -138,6 +140,13 @@ def run(plan: Plan, out, batch_size: int = 0, progress=None, on_case=None) -> di
                     atomic_write_text(folder / names[i] / "error.txt", f"{res.error}\n")
                     err = res.error
                 else:
+                    if footprint:  # the contact pressure over the patch (Figure 5-2), before result.json marks it done
+                        from .contact_pressure import footprint_table
+
+                        o = res.outputs[0]
+                        atomic_write_csv(folder / names[i] / "contact_pressure.csv", None, {
+                            k: np.asarray(v) for k, v in footprint_table(tire.model, tire.params, o["y"],
+                                                                           float(o["z_road"])).items()})
                     res.write(folder / names[i])
                     (folder / names[i] / "error.txt").unlink(missing_ok=True)
                     err = None
@@ -146,7 +155,8 @@ def run(plan: Plan, out, batch_size: int = 0, progress=None, on_case=None) -> di
                 if on_case is not None:
                     on_case(f"{exp.name}/{names[i]}", conds[i], err)
 
-            batch.run(exp, tire, [conds[i] for i in todo], batch=batch_size, on_result=save)
+            footprint = exp.name == "footprint"
+            batch.run(exp, tire, [conds[i] for i in todo], batch=batch_size, on_result=save, keep_outputs=footprint)
         results[exp.name] = [_read(folder / n / "result.json") for n in names]
         _summary(out / exp.name, names, conds, results[exp.name], exp.per_pressure)
     return results

@@ -270,6 +270,14 @@ class SpectrumResult(ResultMixin):
     n: int  # samples used
     window: str
 
+    def interior_peak_Hz(self):
+        """f_peak_Hz when it is a peak inside the band, None when it sits within two raw bins of a band
+        edge: there the maximum is the skirt of a mode outside the band (a window's side lobe of the
+        bounce, say), not a mode in it."""
+        margin = 2.0 * self.raw_resolution_Hz
+        inside = self.f_band_lo_Hz + margin < self.f_peak_Hz < self.f_band_hi_Hz - margin
+        return self.f_peak_Hz if inside and not self.peak_at_band_edge else None
+
 
 def first_mode(t, y, f_band=None, pad_to_resolution=0.01, t_start=None, n_modes=None,
                window="hann", detrend="linear", fit=True):

@@ -55,8 +55,9 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
         s = _signals(d)
         t, fz = s["time_s"], s["contact_force_z_N"]
         band = belt_band(t)
-        belt = (None if band is None else
-                spectra.first_mode(t, fz, f_band=band, t_start=float(t[np.argmax(fz > 0)]), fit=False).f_peak_Hz)
+        sp = None if band is None else spectra.first_mode(t, fz, f_band=band, t_start=float(t[np.argmax(fz > 0)]),
+                                                          fit=False)
+        belt = None if sp is None else sp.interior_peak_Hz()  # a band edge is no mode
         m |= {"drop.static_deflection_m": q["static_deflection_m"], "drop.bounce_f_Hz": q["f_d_fit_Hz"],
               "drop.bounce_zeta": q["xi_fit"], "drop.peak_F_z_N": float(np.nanmax(fz)),
               "drop.belt_mode_Hz": belt}

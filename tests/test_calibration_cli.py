@@ -75,6 +75,14 @@ def test_shell_simulator_is_the_default(capsys):
     assert [g["exp"].name for g in sim.groups] == ["vertical_stiffness", "lateral_stiffness", "rolling_resistance"]
     assert [len(g["targets"]) for g in sim.groups] == [1, 1, 2]  # both E12 targets share one batch
     assert sim.fingerprint()["mesh"]["n_theta"] == spec.tire.n_theta
+    # a progress bar over the cases of each evaluation (an initial ARSM batch is ~20 min on the
+    # default mesh): two evaluations of 3 and 2 cases, each bar filled and closed
+    capsys.readouterr()
+    for total in (3, 2):
+        for done in range(1, total + 1):
+            sim.on_case("x parameter sets", done, total)
+    err = capsys.readouterr().err
+    assert "simulate x parameter sets" in err and "3/3" in err and "2/2" in err
 
 
 def test_calibrate_and_sensitivity_on_the_standin(tmp_path, capsys):

@@ -153,3 +153,27 @@ def _style_guard():
 def test_quick_conditions_are_SI():
     c = _data.conditions("loads", quick=True)
     assert c[0]["pressure_Pa"] == pytest.approx(120 * U.PSI) and c[0]["load_N"] == pytest.approx(2312.5 * U.G0)
+
+
+def test_footprint_figure_from_a_characterization(tmp_path, capsys):
+    """`jtire characterize` writes each footprint case's contact-pressure table, so Figure 5-2 draws
+    from a characterization folder (--from) as every other figure does; the table integrates to the
+    case's load (E01_LOAD_TOL). Coarse ring, footprint only, 2 conditions (~1 min here)."""
+    from jtire.cli import main
+
+    from .conftest import COARSE_SET, SOLVER_SET
+
+    out = tmp_path / "char"
+    argv = ["characterize", str(REPO / "configs" / "characterize.toml"), "--set", 'experiments=["footprint"]',
+            "--set", "grid.loads_kg=[2312.5, 4625.0]", "--set", "grid.pressures_psi=[120.0]",
+            *[a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)], "--no-validate", "--out", str(out)]
+    assert main(argv) == 0
+    cases = sorted((out / "footprint" / "cases").glob("*"))
+    assert len(cases) == 2
+    for c in cases:
+        t = np.genfromtxt(c / "contact_pressure.csv", delimiter=",", names=True)
+        load = __import__("json").loads((c / "result.json").read_text())["condition"]["load_N"]
+        assert float(np.sum(t["contact_pressure_Pa"] * t["point_area_m2"])) == pytest.approx(load, rel=E01_LOAD_TOL)
+    capsys.readouterr()
+    assert _run("fig5_2_footprints", ["--from", str(out), "--out", str(tmp_path / "f.png")], capsys) == 2
+    assert (tmp_path / "f.png").stat().st_size > MIN_PNG_BYTES

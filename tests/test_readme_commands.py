@@ -50,6 +50,7 @@ COVERED = {
     r"jtire calibrate configs/calibration/study\.toml --method gradient --out runs/calibrate/study_lm": "test_calibrate_lm",
     r"jtire export-tir( \S+)*": "test_export_tir",
     r"python paper_figures/(fig\w+)\.py": "test_figure_scripts",
+    r"python paper_figures/fig[56]_\w+\.py --from runs/characterize": "test_characterize",
 }
 EXCLUDED = (r"pip install.*", r"python -m pytest.*", r"python benchmarks/.*")
 FIGURES = ("fig3_5_track_rrc", "fig3_7_sandbox_rrc", "fig4_2_competition")
@@ -220,6 +221,14 @@ def test_characterize(user_dir, capsys):
     assert jtire("jtire characterize --out runs/characterize", *small) == 0
     out = user_dir / "runs" / "characterize"
     assert (out / "tire.tir").is_file() and (out / "characterization.json").is_file()
+    # the README's figure table: every chapter 5-6 figure drawn from that folder
+    for path in sorted((REPO / "paper_figures").glob("fig[56]_*.py")):
+        spec = importlib.util.spec_from_file_location(path.stem, path)
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        png = user_dir / "runs" / "figures" / f"{path.stem}.png"
+        assert mod.main(["--from", "runs/characterize", "--out", str(png)]) == 0, path.stem
+        assert png.stat().st_size > 10_000, path.stem
     assert jtire("jtire calibrate configs/calibration/study.toml --out runs/calibrate/study", "--standin") == 0
     assert jtire("jtire characterize --tire runs/calibrate/study/calibrated_tire.toml --out runs/char_cal", *small,
                  "--no-validate") == 0

@@ -36,11 +36,31 @@ def simulator_for(spec, standin: bool, say):
         say("simulator: closed-form STAND-IN (not physics)")
         return StandinSimulator(spec.space, spec.base_params, spec.targets)
     try:
-        return make_simulator(spec, spec.tire)
+        sim = make_simulator(spec, spec.tire)
     except NotImplementedError as e:
         say(f"jtire calibrate: error: {e} (not available yet; --standin runs the machinery on a stand-in)",
             err=True)
         return None
+    sim.on_case = _case_bar()
+    return sim
+
+
+def _case_bar():
+    """on_case for the shell simulator: one tqdm bar per evaluation batch (cases of every target)."""
+    from tqdm import tqdm
+
+    state = {"bar": None}
+
+    def on_case(label, done, total):
+        if state["bar"] is None or state["bar"].total != total or state["bar"].n >= total:
+            if state["bar"] is not None:
+                state["bar"].close()
+            state["bar"] = tqdm(total=total, desc=f"simulate {label}", unit="case", leave=False, mininterval=0)
+        state["bar"].update(done - state["bar"].n)
+        if done >= total:
+            state["bar"].close()
+
+    return on_case
 
 
 def run_cli(args, say) -> int:

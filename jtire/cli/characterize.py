@@ -78,11 +78,18 @@ def _validate(plan, out, say) -> list:
 
     grid = {(round(c["load_N"] / U.G0, 6), round(c["pressure_Pa"] / U.PSI, 6)) for c in plan.conditions}
     conds = [c for c in DEFAULT_CONDITIONS if c in grid] or [sorted(grid)[0]]
+    from ..rigid_ring.diagnosis import diagnose
+    from ..rigid_ring.table import read_characterization
+
     res = validate(out, plan, conds)
+    char = read_characterization(out)
     text, written = ["## Rigid ring vs shell model\n"], []
     for c, rows, s_sig, r_sig in res:
         kg, psi = c["load_N"] / U.G0, c["pressure_Pa"] / U.PSI
         text += [f"### {kg:g} kg, {psi:g} psi\n", validation.markdown(rows)]
+        notes = diagnose(char, c["load_N"], c["pressure_Pa"], rows, char_dir=out, shell_signals=s_sig)
+        if notes:
+            text += ["Causes of the disagreements beyond tolerance:\n", "\n".join(notes) + "\n"]
         written.append(validation.validation_figure(s_sig, r_sig, out / f"validation_{kg:g}kg_{psi:g}psi.png",
                                                     title=f"Rigid ring vs shell model, {kg:g} kg, {psi:g} psi"))
     written.append(atomic_write_text(out / "validation.md", "\n".join(text)))

@@ -96,7 +96,11 @@ def drop_test(d: Derived, drop_height=0.02, duration=0.4, gravity=0.0, n_save=40
     jac = linearize(m, drive, _state(z_a=eq["z_a"], z_b=eq["z_b"]))
     fn, zeta = modes(jac, ("z_a", "z_b"))
     k_sv, m_tot = d.k_sv, t.m_tot_kg
-    q = {"static_deflection_m": t.unloaded_radius_m - fd.x_inf_fit,
+    # static deflection: where the wheel rests under the load (docs/rigid-ring.md §8: F_z0/k_sv), as
+    # the shell's drop reports it (its rest after the drop); the decay fit's asymptote is no rest
+    # position when the record is mostly lift-offs (18 % short at 2312.5 kg on the default mesh)
+    q = {"static_deflection_m": t.unloaded_radius_m - eq["z_a"],
+         "static_deflection_fit_m": t.unloaded_radius_m - fd.x_inf_fit,
          "static_deflection_equilibrium_m": t.unloaded_radius_m - eq["z_a"],
          "bounce_f_d_Hz": fd.omega_d_fit / (2 * math.pi), "bounce_f_n_Hz": fd.omega_n_fit / (2 * math.pi),
          "bounce_zeta_fit": fd.xi_fit, "bounce_zeta_2p": fd.xi_2p,
@@ -106,7 +110,7 @@ def drop_test(d: Derived, drop_height=0.02, duration=0.4, gravity=0.0, n_save=40
          "C_tot_fit_Ns_per_m": 2 * fd.xi_fit * math.sqrt(m_tot * k_sv),
          "peak_F_z_N": float(fzc.max()), "first_contact_s": float(ts[i0]), "lost_contact": bool(air.size),
          "last_lift_off_s": None if last_air is None else float(ts[last_air]),
-         "F_z_spectrum_peak_Hz": sp.f_peak_Hz}
+         "F_z_spectrum_peak_Hz": sp.interior_peak_Hz()}  # None: no mode inside the band
     implied = {"static_deflection_m": fz / k_sv, "bounce_f_n_quasi_static_Hz": math.sqrt(k_sv / m_tot) / (2 * math.pi),
                "zeta_quasi_static": d.C_tot / (2 * math.sqrt(k_sv * m_tot)),
                "bounce_f_n_Hz": float(fn[0]), "bounce_zeta": float(zeta[0]),
