@@ -111,8 +111,9 @@ def _is_num(v):
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def load_calibration(path, overrides=(), data_dir=None) -> CalibrationSpec:
-    """Read and validate a calibration config (+ `--set` overrides)."""
+def load_calibration(path, overrides=(), data_dir=None, tire_path=None) -> CalibrationSpec:
+    """Read and validate a calibration config (+ `--set` overrides). tire_path: a tire TOML to use
+    instead of the config's tire_file (e.g. a calibrated tire to check against the targets)."""
     from ..tire import params_from_spec
 
     path = Path(path)
@@ -124,7 +125,7 @@ def load_calibration(path, overrides=(), data_dir=None) -> CalibrationSpec:
             raise ConfigError(f"{key}: unknown field (allowed: {', '.join(sorted(TOP_KEYS))})")
     if not isinstance(raw.get("tire_file"), str):
         raise ConfigError("tire_file: missing (path of the tire TOML, relative to this config)")
-    tire_path = (path.parent / raw["tire_file"]).resolve()
+    tire_path = Path(tire_path).resolve() if tire_path is not None else (path.parent / raw["tire_file"]).resolve()
     tire_raw = apply_overrides(load_toml(tire_path, "tire file"),
                                [o[5:] for o in overrides if o.startswith("tire.")])
     try:

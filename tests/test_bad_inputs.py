@@ -353,6 +353,10 @@ CASES = [
          "cannot read or write"),
     Case("calibrate-method-choice", lambda t: ["calibrate", STUDY, "--method", "newton", *_out(t)],
          "argument --method: invalid choice"),
+    Case("calibrate-check-tire-missing", lambda t: ["calibrate", STUDY, "--standin", "--check-tire",
+                                                    str(Path(t) / "none.toml")], "no such tire file"),
+    Case("calibrate-check-tire-not-a-tire", lambda t: ["calibrate", STUDY, "--standin", "--check-tire", STUDY],
+         "tire file study.toml"),
     # ---- sample ----------------------------------------------------------------------------------
     Case("sample-no-history", lambda t: ["sample", POSTERIOR, "--history", str(Path(t) / "none"), *_out(t)],
          "no history.jsonl"),

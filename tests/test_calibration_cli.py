@@ -5,6 +5,7 @@ import json
 
 import pytest
 
+from jtire.calibration.spec import load_calibration
 from jtire.cli import main
 
 from .conftest import REPO
@@ -92,6 +93,16 @@ def test_calibrate_and_sensitivity_on_the_standin(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "| total |" in text and "26 evaluations" in text
     assert (out / "calibrated_tire.toml").is_file() and (out / "figure_4_6.png").is_file()
+    # the calibrated tire checked by a fresh evaluation (--check-tire): its own values give the best
+    # evaluation's responses back (the TOML keeps the values to 1e-9 relative or better)
+    assert main(["calibrate", str(CAL / "study.toml"), "--standin", "--check-tire", str(out / "calibrated_tire.toml"),
+                 "--out", str(tmp_path / "check")]) == 0
+    capsys.readouterr()
+    check = json.loads((tmp_path / "check" / "check_tire.json").read_text())
+    best = json.loads((out / "summary.json").read_text())["responses_SI"]
+    for row in check["rows"][:-1]:
+        t = next(t for t in load_calibration(CAL / "study.toml", []).targets if t.name == row["target"])
+        assert row["simulated"] * t.unit_factor == pytest.approx(best[row["target"]], rel=1e-6)
     # a rerun with other settings refuses in one line
     _one_line_error(capsys, ["calibrate", str(CAL / "study.toml"), "--standin", "--out", str(out),
                              "--set", "arsm.seed=4"], "holds a run made with other options")

@@ -47,6 +47,8 @@ COVERED = {
         "test_calibrate_sensitivity_sample",
     r"jtire sample( configs/calibration/posterior\.toml --out runs/sample/study --check)?":
         "test_calibrate_sensitivity_sample",
+    r"jtire calibrate configs/calibration/study\.toml --check-tire runs/calibrate/study/calibrated_tire\.toml":
+        "test_calibrate_sensitivity_sample",
     r"jtire calibrate configs/calibration/study\.toml --method gradient --out runs/calibrate/study_lm": "test_calibrate_lm",
     r"jtire export-tir( \S+)*": "test_export_tir",
     r"python paper_figures/(fig\w+)\.py": "test_figure_scripts",
@@ -266,6 +268,10 @@ def test_calibrate_sensitivity_sample(user_dir, capsys):
     from its history (the config's default history folder, relative to the working folder)."""
     assert jtire("jtire calibrate configs/calibration/study.toml --out runs/calibrate/study", "--standin") == 0
     assert (user_dir / "runs" / "calibrate" / "study" / "calibrated_tire.toml").is_file()
+    capsys.readouterr()
+    assert jtire("jtire calibrate configs/calibration/study.toml --check-tire runs/calibrate/study/calibrated_tire.toml",
+                 "--standin") == 0
+    assert "| total |" in capsys.readouterr().out
     assert jtire("jtire sensitivity configs/calibration/study.toml --at runs/calibrate/study", "--standin",
                  "--out", "runs/sensitivity") == 0
     assert "singular values" in capsys.readouterr().out

@@ -21,6 +21,9 @@ def add_arguments(parser):
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="override a config field, e.g. --set arsm.seed=3 or "
                         "--set tire.mesh.n_theta=48 (repeatable)")
+    parser.add_argument("--check-tire", default=None, metavar="TIRE",
+                        help="no calibration: evaluate the config's targets on this tire TOML (e.g. "
+                        "DIR/calibrated_tire.toml) at the config's mesh and print measured, simulated, error")
     parser.add_argument("--standin", action="store_true",
                         help="use the closed-form STAND-IN simulator (a dry run of the machinery, "
                         "not physics)")
@@ -70,6 +73,8 @@ def run_cli(args, say) -> int:
 
     from ..io import check_writable
 
+    if args.check_tire is not None:
+        return _check_tire(args, say)
     spec = load_calibration(args.config, args.set)
     if args.budget is not None and not args.budget >= 1:
         raise ConfigError(f"--budget = {args.budget:g}: must be >= 1")
@@ -94,4 +99,52 @@ def run_cli(args, say) -> int:
         f"{res.cost_forward:.0f} forward-run equivalents, simulator wall {res.wall_s:.1f} s; "
         f"stop: {res.stop_reason}")
     say("wrote " + ", ".join(str(p) for p in paths.values()))
+    return 0
+
+
+def _check_tire(args, say) -> int:
+    """`--check-tire TIRE`: the config's targets simulated on TIRE (one evaluation, its own values),
+    printed as Table 4-4 and, with --out, written as check_tire.json / check_tire.md."""
+    import time
+    import types
+
+    import numpy as np
+
+    from ..calibration.report import format_markdown, table_4_4
+    from ..calibration.spec import load_calibration
+    from ..calibration.targets import percent_errors, total_error
+    from ..errors import ConfigError
+    from ..io import atomic_write_json, atomic_write_text, check_writable
+
+    tire = Path(args.check_tire)
+    if not tire.is_file():
+        raise ConfigError(f"--check-tire {tire}: no such tire file")
+    spec = load_calibration(args.config, args.set, tire_path=tire)
+    if args.out:
+        check_writable(Path(args.out))
+    sim = simulator_for(spec, args.standin, say)
+    if sim is None:
+        return 2
+    t0 = time.perf_counter()
+    values = sim.evaluate(spec.space.default[None])[0]
+    wall = time.perf_counter() - t0
+    if not np.all(np.isfinite(values)):
+        bad = [n for n, v in zip(spec.response_names, values) if not np.isfinite(v)]
+        say(f"jtire calibrate: error: --check-tire: the simulation of {', '.join(bad)} failed on {tire}", err=True)
+        return 2
+    errs = percent_errors(values, spec.targets)
+    res = types.SimpleNamespace(values=values, errors_pct=errs,
+                                total_error_pct=float(total_error(values[None], spec.targets, spec.weights)[0]))
+    rows = table_4_4(res, spec)
+    text = format_markdown(rows)
+    say(f"{tire}: the targets of {Path(args.config).name} simulated in {wall:.1f} s "
+        f"(mesh {spec.tire.n_theta} x {spec.tire.n_side} x {spec.tire.n_crown})")
+    say(text.rstrip())
+    if args.out:
+        out = Path(args.out)
+        atomic_write_text(out / "check_tire.md", text)
+        atomic_write_json(out / "check_tire.json", {"tire": str(tire.resolve()), "config": str(args.config),
+                                                    "rows": rows, "simulator_wall_s": wall,
+                                                    "simulator": sim.fingerprint()})
+        say(f"wrote {out / 'check_tire.md'}, {out / 'check_tire.json'}")
     return 0
