@@ -68,7 +68,16 @@ class _GP:
         kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.full(d, 0.5), (1e-2, 1e2))
                   + WhiteKernel(1e-2, (1e-8, 1e1)))
         self.gp = GaussianProcessRegressor(kernel, n_restarts_optimizer=2, random_state=seed)
-        self.gp.fit(u, rs)
+        import warnings
+
+        from sklearn.exceptions import ConvergenceWarning
+
+        # a length scale at its upper bound means the residual does not vary along that parameter
+        # (most of the 20 do not, for a given response): an answer, not a failure. The fit's
+        # quality is judged by its leave-one-out error (self.loo), which picks the emulator.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            self.gp.fit(u, rs)
         k = self.gp.kernel_(u) + self.gp.alpha * np.eye(len(u))
         kinv = np.linalg.inv(k)
         self.loo = self.sd * (kinv @ rs) / np.diag(kinv)
