@@ -104,7 +104,9 @@ class Emulator:
     """Per-response models of ln(response) over the unit box of a ParamSpace.
 
     names: (m,) responses; kinds: (m,) the chosen model per response; loo: {response: {kind:
-    LOO RMSE of ln(response)}} for every candidate tried; n_points: training points.
+    LOO RMSE of ln(response)}} for every candidate tried; n_points: training points;
+    var_scale: (m,) factors on the predictive variance (1 unless calibrated on held-out simulator
+    runs: `calibration.sampling.calibrate_variance`).
     """
 
     space: object
@@ -113,16 +115,23 @@ class Emulator:
     kinds: tuple
     loo: dict
     n_points: int
+    var_scale: np.ndarray = None
 
     def predict(self, thetas):
         """thetas (n, d) -> (mean of ln response (n, m), predictive variance (n, m))."""
         u = self.space.to_unit(np.atleast_2d(np.asarray(thetas, float)))
         out = [m.predict(u) for m in self.models]
-        return (np.stack([o[0] for o in out], axis=-1), np.stack([o[1] for o in out], axis=-1))
+        var = np.stack([o[1] for o in out], axis=-1)
+        if self.var_scale is not None:
+            var = var * np.asarray(self.var_scale, float)
+        return np.stack([o[0] for o in out], axis=-1), var
 
     def summary(self) -> dict:
-        return {"n_points": self.n_points, "chosen": dict(zip(self.names, self.kinds)),
-                "loo_rmse_ln": self.loo, "gp_available": gp_available()}
+        out = {"n_points": self.n_points, "chosen": dict(zip(self.names, self.kinds)),
+               "loo_rmse_ln": self.loo, "gp_available": gp_available()}
+        if self.var_scale is not None:
+            out["variance_scale"] = dict(zip(self.names, np.asarray(self.var_scale, float).tolist()))
+        return out
 
 
 def fit_emulator(space, names, thetas, responses, candidates=CANDIDATES, seed: int = 0) -> Emulator:

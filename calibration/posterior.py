@@ -10,10 +10,23 @@ Model, in theta = ln(parameter) (the calibration's ParamSpace):
                  the defaults are typical; it regularizes the unidentified directions).
     likelihood:  ln t_i ~ N(mu_i(theta), sigma_i^2 + v_i(theta)) for every target i, with mu_i,
                  v_i the emulator's mean and predictive variance of ln(response) and sigma_i the
-                 target's relative measurement uncertainty (the config says where it comes from).
+                 target's relative measurement uncertainty (the config says where it comes from),
+                 combined with a model-discrepancy sd where the config asks for one
+                 (sigma_i^2 = measurement^2 + discrepancy^2; calibration/sampling.py says how
+                 it is set).
 
 The log-probability is vectorized over walkers (emcee's vectorize=True): one emulator call per
 step for the whole ensemble.
+
+Where the walkers move (measured on the study calibration's 20 parameters, 64 walkers, the GP
+emulator, 10,000 steps): a uniform prior on a box puts hard walls in every direction the four
+targets leave free, and emcee's stretch move, proposing along lines through other walkers, is
+mostly thrown out at those walls: acceptance 0.08, tau ~2000 (a 20,000-step chain did not
+converge). The chain therefore runs in unbounded coordinates z = logit(u), u = (theta - lower) /
+width (the bounds map to +-infinity; the density carries the Jacobian u (1 - u), so the posterior
+in theta is unchanged: `UnboundedPosterior`), with emcee's differential-evolution moves (80 %
+DEMove, 20 % DESnookerMove, emcee's documented mix for many dimensions): acceptance 0.22, tau
+~75-100, converged (50 tau) in ~5,000 steps.
 
 Chains are seeded and stored in chain.h5 (emcee's HDF5 layout); the run proceeds in chunks of
 `check_every` steps aligned to multiples of check_every, and after each chunk estimates the
@@ -32,7 +45,10 @@ from scipy import stats
 
 from ..errors import ConfigError
 
-__all__ = ["LogPosterior", "SamplerResult", "run_sampler", "diagnostics", "prior_interval"]
+__all__ = ["LogPosterior", "UnboundedPosterior", "SamplerResult", "run_sampler", "diagnostics",
+           "prior_interval", "MOVES"]
+
+MOVES = ("de", "stretch")
 
 
 class LogPosterior:
@@ -68,6 +84,43 @@ class LogPosterior:
             ll = -0.5 * np.sum((self.lt - mu) ** 2 / v + np.log(2 * np.pi * v), axis=1)
             out[ok] = lp[ok] + np.where(np.isfinite(ll), ll, -np.inf)
         return out
+
+
+class UnboundedPosterior:
+    """`log_post` (over theta in a bounded box) seen in z = logit((theta - lower) / width).
+
+    ln p(z) = ln p(theta(z)) + sum ln(u (1 - u)) (+ const): the same posterior, with no walls.
+    """
+
+    def __init__(self, log_post, space):
+        self.log_post, self.space = log_post, space
+
+    def to_theta(self, z):
+        from scipy.special import expit
+
+        u = expit(np.asarray(z, float))
+        return np.clip(self.space.lower + self.space.width * u, self.space.lower, self.space.upper)
+
+    def to_z(self, theta, eps: float = 1e-9):
+        from scipy.special import logit
+
+        return logit(np.clip(self.space.to_unit(np.asarray(theta, float)), eps, 1.0 - eps))
+
+    def __call__(self, z):
+        z = np.atleast_2d(np.asarray(z, float))
+        # ln u + ln(1 - u) = -ln(1 + e^-z) - ln(1 + e^z), without overflow
+        jac = -np.sum(np.logaddexp(0.0, -z) + np.logaddexp(0.0, z), axis=1)
+        return self.log_post(self.to_theta(z)) + jac
+
+
+def _moves(kind: str):
+    import emcee
+
+    if kind == "stretch":
+        return None  # emcee's default StretchMove
+    if kind == "de":
+        return [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)]
+    raise ValueError(f"moves = {kind!r}: one of {MOVES}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -224,7 +277,7 @@ def _load(path: Path, walkers: int, d: int):
 
 
 def run_sampler(log_prob, p0, path, walkers: int, max_steps: int, check_every: int = 500,
-                n_tau: float = 50.0, seed: int = 0, progress=None) -> SamplerResult:
+                n_tau: float = 50.0, seed: int = 0, progress=None, moves: str = "stretch") -> SamplerResult:
     """Run (or resume) an emcee EnsembleSampler whose chain is stored at `path` (chain.h5).
 
     log_prob: vectorized, thetas (walkers, d) -> (walkers,); p0: (walkers, d) start (used only
@@ -232,7 +285,8 @@ def run_sampler(log_prob, p0, path, walkers: int, max_steps: int, check_every: i
     sampler from the stored state (positions, log-probabilities, random state), in a fresh run and
     a resumed one alike, so a resumed chain is the uninterrupted one. Each finished chunk is stored
     at once (atomically) in path + ".chunks/"; at the end chain.h5 is written whole and the chunks
-    removed. progress: optional callable(steps, tau) after each chunk.
+    removed. progress: optional callable(steps, tau) after each chunk. moves: "stretch" (emcee's
+    default) or "de" (differential evolution, see the module docstring).
     """
     import shutil
 
@@ -261,7 +315,7 @@ def run_sampler(log_prob, p0, path, walkers: int, max_steps: int, check_every: i
     folder = _chunks_dir(path)
     while it < max_steps and not converged:
         n = min(check_every - it % check_every, max_steps - it)
-        sampler = emcee.EnsembleSampler(walkers, d, log_prob, vectorize=True)
+        sampler = emcee.EnsembleSampler(walkers, d, log_prob, vectorize=True, moves=_moves(moves))
         state = sampler.run_mcmc(state, n, progress=False)
         c, l, a = sampler.get_chain(), sampler.get_log_prob(), sampler.backend.accepted
         _write_chunk(folder, it, c, l, a, state.random_state)

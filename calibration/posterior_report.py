@@ -21,7 +21,7 @@ from .posterior import prior_interval
 from .targets import derived_quantity
 from ..io import atomic_savefig
 
-__all__ = ["predictive", "widths", "plot_corner", "simulator_check"]
+__all__ = ["predictive", "widths", "plot_corner", "simulator_check", "check_draws", "coverage"]
 
 _Z90 = float(stats.norm.ppf(0.95))
 
@@ -97,6 +97,27 @@ def plot_corner(samples, names, path, max_params: int = 8, order=None, title: st
     return atomic_savefig(fig, path, dpi=100)
 
 
+def check_draws(samples, n_draws: int = 32, seed: int = 0) -> np.ndarray:
+    """The (n, d) posterior samples the simulator check runs (seeded, without replacement)."""
+    rng = np.random.default_rng(seed)
+    n = min(int(n_draws), samples.shape[0])
+    return samples[rng.choice(samples.shape[0], size=n, replace=False)]
+
+
+def coverage(emulator, thetas, y, level: float = 0.9) -> dict:
+    """Coverage of the emulator's `level` predictive intervals by simulated responses y (n, m)."""
+    y = np.asarray(y, float)
+    mu, var = emulator.predict(thetas)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = (np.log(y) - mu) / np.sqrt(var)
+    zq = float(stats.norm.ppf(0.5 + level / 2))
+    ok = np.all(np.isfinite(z), axis=1)
+    cover = {name: float(np.mean(np.abs(z[ok, i]) <= zq)) if ok.any() else float("nan")
+             for i, name in enumerate(emulator.names)}
+    return {"coverage": cover, "level": level, "n": int(ok.sum()), "n_requested": len(thetas),
+            "z": z, "thetas": np.asarray(thetas), "simulated": y}
+
+
 def simulator_check(sim, emulator, samples, n_draws: int = 32, seed: int = 0,
                     level: float = 0.9) -> dict:
     """Push n_draws posterior samples through the simulator as one batch; coverage of the
@@ -105,16 +126,5 @@ def simulator_check(sim, emulator, samples, n_draws: int = 32, seed: int = 0,
     Returns {"coverage": {name: fraction}, "n": draws used (finite runs), "z": (n, m)
     standardized residuals (ln sim - mean) / sd, "thetas", "simulated"}.
     """
-    rng = np.random.default_rng(seed)
-    n = min(int(n_draws), samples.shape[0])
-    thetas = samples[rng.choice(samples.shape[0], size=n, replace=False)]
-    y = np.asarray(sim.evaluate(thetas), float)
-    mu, var = emulator.predict(thetas)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        z = (np.log(y) - mu) / np.sqrt(var)
-    zq = float(stats.norm.ppf(0.5 + level / 2))
-    ok = np.all(np.isfinite(z), axis=1)
-    cover = {name: float(np.mean(np.abs(z[ok, i]) <= zq)) if ok.any() else float("nan")
-             for i, name in enumerate(emulator.names)}
-    return {"coverage": cover, "level": level, "n": int(ok.sum()), "n_requested": n,
-            "z": z, "thetas": thetas, "simulated": y}
+    thetas = check_draws(samples, n_draws, seed)
+    return coverage(emulator, thetas, np.asarray(sim.evaluate(thetas), float), level)

@@ -6,9 +6,11 @@
                                       # folder, like --out): its history.jsonl trains the emulator
     [prior]      kind = "log_uniform" | "log_normal", sigma_ln = 0.5 (log_normal only), why
     [uncertainty.NAME]  relative = 0.05 | from = "track_scatter" | "track_trend";  why = "..."
+    [discrepancy] kind = "best_miss" | "none";  why = "..."
     [emulator]   candidates = ["linear", "reduced", "full", "gp"], seed
-    [sampler]    walkers, max_steps, check_every, n_tau, seed, init_spread
-    [check]      draws, seed
+    [sampler]    walkers, max_steps, check_every, n_tau, seed, init_spread,
+                 moves = "de" | "stretch", coordinates = "logit" | "log"
+    [check]      draws, seed, refine = true | false, folds
 """
 
 import dataclasses
@@ -19,14 +21,17 @@ from ..schema import Field as F
 from ..config import apply_overrides, load_toml, validate_table
 from ..errors import ConfigError
 from .emulator import CANDIDATES
+from .posterior import MOVES
 from .spec import load_calibration
 
 __all__ = ["PosteriorSpec", "load_posterior", "PRIORS", "SAMPLER_SCHEMA"]
 
 PRIORS = ("log_uniform", "log_normal")
+DISCREPANCY = ("best_miss", "none")
+COORDINATES = ("logit", "log")
 UNCERTAINTY_FROM = ("track_scatter", "track_trend")
-TOP_KEYS = {"calibration", "history", "description", "prior", "uncertainty", "emulator",
-            "sampler", "check"}
+TOP_KEYS = {"calibration", "history", "description", "prior", "uncertainty", "discrepancy",
+            "emulator", "sampler", "check"}
 SAMPLER_SCHEMA = {
     "walkers": F(int, 1, 4, 100000, 64),
     "max_steps": F(int, 1, 10, 10**8, 20000, "steps"),
@@ -35,15 +40,17 @@ SAMPLER_SCHEMA = {
     "seed": F(int, 1, 0, 2**31 - 1, 0),
     "init_spread": F(float, 1, 1e-8, 1, 1e-3, "(unit box)"),
 }
-CHECK_SCHEMA = {"draws": F(int, 1, 1, 100000, 32), "seed": F(int, 1, 0, 2**31 - 1, 0)}
+CHECK_SCHEMA = {"draws": F(int, 1, 1, 100000, 32), "seed": F(int, 1, 0, 2**31 - 1, 0),
+                "folds": F(int, 1, 2, 1000, 4)}
 
 
 @dataclasses.dataclass(frozen=True)
 class PosteriorSpec:
     """path; calibration: CalibrationSpec; history: folder; prior: "log_uniform"/"log_normal";
     sigma_ln: sd of ln p of the log-normal prior; sigma_rel: (m,) measurement sd relative to each
-    target; sigma_sources: (m,) where each comes from; candidates; emulator_seed; sampler,
-    check: option dicts; raw: the config after overrides."""
+    target; sigma_sources: (m,) where each comes from; discrepancy: "best_miss" or "none";
+    candidates; emulator_seed; sampler, check: option dicts (sampler["moves"],
+    sampler["coordinates"], check["refine"] included); raw: the config after overrides."""
 
     path: Path
     calibration: object
@@ -54,6 +61,7 @@ class PosteriorSpec:
     sigma_sources: tuple
     candidates: tuple
     emulator_seed: int
+    discrepancy: str
     sampler: dict
     check: dict
     raw: dict
@@ -62,6 +70,7 @@ class PosteriorSpec:
         """What fixes the chain (max_steps excluded: a budget may grow)."""
         return {"calibration": self.calibration.fingerprint(), "prior": self.prior,
                 "sigma_ln": self.sigma_ln, "sigma_rel": list(self.sigma_rel),
+                "discrepancy": self.discrepancy,
                 "candidates": list(self.candidates), "emulator_seed": self.emulator_seed,
                 "sampler": {k: v for k, v in self.sampler.items() if k != "max_steps"}}
 
@@ -141,7 +150,21 @@ def load_posterior(path, overrides=()) -> PosteriorSpec:
     eseed = em.get("seed", 0)
     if not (isinstance(eseed, int) and not isinstance(eseed, bool) and eseed >= 0):
         raise ConfigError(f"emulator.seed = {eseed!r}: must be an integer >= 0")
-    sampler = validate_table(raw.get("sampler", {}), SAMPLER_SCHEMA, "sampler")
+    disc = raw.get("discrepancy", {})
+    if not isinstance(disc, dict) or any(k not in ("kind", "why") for k in disc):
+        raise ConfigError("discrepancy: a table with fields kind, why")
+    dkind = disc.get("kind", "none")
+    if dkind not in DISCREPANCY:
+        raise ConfigError(f"discrepancy.kind = {dkind!r}: must be one of {DISCREPANCY}")
+    sraw = dict(raw.get("sampler", {})) if isinstance(raw.get("sampler", {}), dict) else raw["sampler"]
+    choices = {}
+    if isinstance(sraw, dict):
+        for key, allowed, default in (("moves", MOVES, "de"), ("coordinates", COORDINATES, "logit")):
+            v = sraw.pop(key, default)
+            if v not in allowed:
+                raise ConfigError(f"sampler.{key} = {v!r}: must be one of {allowed}")
+            choices[key] = v
+    sampler = {**validate_table(sraw, SAMPLER_SCHEMA, "sampler"), **choices}
     d = cal.space.d
     if sampler["walkers"] < 2 * d or sampler["walkers"] % 2:
         raise ConfigError(f"sampler.walkers = {sampler['walkers']}: must be even and >= 2 x the "
@@ -149,8 +172,15 @@ def load_posterior(path, overrides=()) -> PosteriorSpec:
     if sampler["check_every"] > sampler["max_steps"]:
         raise ConfigError(f"sampler.check_every = {sampler['check_every']}: must be <= "
                           f"sampler.max_steps = {sampler['max_steps']}")
-    check = validate_table(raw.get("check", {}), CHECK_SCHEMA, "check")
+    craw = dict(raw.get("check", {})) if isinstance(raw.get("check", {}), dict) else raw["check"]
+    refine = craw.pop("refine", True) if isinstance(craw, dict) else True
+    if not isinstance(refine, bool):
+        raise ConfigError(f"check.refine = {refine!r}: must be true or false")
+    check = {**validate_table(craw, CHECK_SCHEMA, "check"), "refine": refine}
+    if check["refine"] and check["folds"] > check["draws"]:
+        raise ConfigError(f"check.folds = {check['folds']}: must be <= check.draws = {check['draws']}")
     return PosteriorSpec(path=path, calibration=cal, history=Path(raw["history"]), prior=kind,
                          sigma_ln=float(sigma_ln), sigma_rel=tuple(sig), sigma_sources=tuple(src),
-                         candidates=tuple(cands), emulator_seed=int(eseed), sampler=sampler,
+                         candidates=tuple(cands), emulator_seed=int(eseed), discrepancy=dkind,
+                         sampler=sampler,
                          check=check, raw=raw)

@@ -101,6 +101,8 @@ class ShellSimulator(Simulator):
             if self.on_case is not None:
                 self.on_case(f"{n} parameter set{'s' * (n > 1)}", done[0], total)
 
+        if self.on_case is not None:  # the bar appears at 0 of total, before the first case runs
+            self.on_case(f"{n} parameter set{'s' * (n > 1)}", 0, total)
         for g in self.groups:
             exp, tg = g["exp"], g["targets"]
             conds = [t.condition for _, t in tg]
@@ -135,10 +137,15 @@ class ShellSimulator(Simulator):
         values = np.full(len(names), np.nan)
         J = np.full((len(names), self.space.d), np.nan)
         t0 = time.perf_counter()
-        for exp, conds, qs, idx in jobs:
+        label = f"Jacobian ({self.space.d} tangents; one experiment at a time)"
+        for k, (exp, conds, qs, idx) in enumerate(jobs):
+            if self.on_case is not None:
+                self.on_case(label, k, len(jobs))
             v, jac = traced_jacobian(exp, self.tire, self.params, theta, conds, qs)
             values[idx] = v
             J[idx] = jac
+        if self.on_case is not None:
+            self.on_case(label, len(jobs), len(jobs))
         self.last_wall["jacobian"] = time.perf_counter() - t0
         return values, J
 

@@ -130,6 +130,11 @@ BAD_POSTERIORS = [
     (("relative = 0.03", "relative = -0.03"), ["uncertainty.DZ.relative"]),
     (('candidates = ["linear", "reduced", "full", "gp"]', 'candidates = ["spline"]'),
      ["emulator.candidates"]),
+    (('kind = "best_miss"', 'kind = "kennedy"'), ["discrepancy.kind", "best_miss"]),
+    (('moves = "de"', 'moves = "walk"'), ["sampler.moves", "stretch"]),
+    (('coordinates = "logit"', 'coordinates = "probit"'), ["sampler.coordinates", "logit"]),
+    (("refine = true", "refine = 1"), ["check.refine", "true or false"]),
+    (("folds = 4", "folds = 40"), ["check.folds", "check.draws"]),
 ]
 
 
@@ -165,3 +170,32 @@ def test_sample_short_run_says_not_converged(tmp_path, capsys):
                  "emulator.json", "check.json"):
         assert (out / name).is_file(), name
     assert json.loads((out / "check.json").read_text())["n"] == 32
+    if "refined round" in text:  # the stand-in's coverage was off: a refined round ran
+        assert json.loads((out / "refined" / "check.json").read_text())["n"] == 32
+        assert "variance_scale" in json.loads((out / "refined" / "emulator.json").read_text())
+
+
+def test_sample_check_refines_and_resumes_without_rerunning(tmp_path, capsys):
+    """The stand-in check (coverage off on a 60-step chain): a refined round in out/refined with
+    rescaled variance and fresh draws; the same command again reruns no simulator: both checks
+    reuse their stored runs, and the reports come out the same."""
+    cal = tmp_path / "cal"
+    assert main(["calibrate", str(CAL / "study.toml"), "--standin", "--out", str(cal)]) == 0
+    out = tmp_path / "post"
+    argv = ["sample", str(CAL / "posterior.toml"), "--history", str(cal), "--out", str(out),
+            "--set", "sampler.max_steps=60", "--set", "sampler.check_every=30", "--set",
+            'emulator.candidates=["linear"]', "--set", "check.draws=8", "--check", "--standin"]
+    capsys.readouterr()
+    main(argv)
+    first = capsys.readouterr().out
+    assert "refined round" in first, first[-2000:]
+    a = json.loads((out / "check.json").read_text())
+    b = json.loads((out / "refined" / "check.json").read_text())
+    assert a["thetas"] != b["thetas"]  # fresh draws check the refined emulator
+    assert json.loads((out / "refined" / "emulator.json").read_text())["n_points"] == \
+        json.loads((out / "emulator.json").read_text())["n_points"] + 8
+    before = (out / "refined" / "predictive.csv").read_text()
+    main(argv)
+    again = capsys.readouterr().out
+    assert again.count("stored runs reused") == 2 and "one batch" not in again
+    assert (out / "refined" / "predictive.csv").read_text() == before

@@ -162,3 +162,116 @@ def test_simulator_check_measures_coverage():
         assert abs(cov - 0.9) < 0.05
     too_sure = simulator_check(_Noisy(), _Linear(v / 100), samples, n_draws=400, seed=0)
     assert max(too_sure["coverage"].values()) < 0.3  # an overconfident emulator is caught
+
+
+def test_unbounded_coordinates_keep_the_posterior():
+    """In z = logit(u) a flat density on the box must come back flat: the Jacobian u (1 - u) is
+    what makes the z-chain's theta uniform. DE moves, 32 walkers, 6000 steps (tau ~20: ESS ~9000);
+    mean to 0.03 width (> 10 standard errors of 0.003), variance width^2/12 to 10 %."""
+    import emcee
+
+    from jtire.calibration.posterior import UnboundedPosterior
+
+    space = _space(1.0)
+
+    def flat(th):
+        th = np.atleast_2d(th)
+        inside = np.all((th >= space.lower) & (th <= space.upper), axis=1)
+        return np.where(inside, 0.0, -np.inf)
+
+    post = UnboundedPosterior(flat, space)
+    th0 = np.random.default_rng(0).uniform(-0.01, 0.01, (32, D))
+    np.testing.assert_allclose(post.to_theta(post.to_z(th0)), th0, atol=1e-12)
+    s = emcee.EnsembleSampler(32, D, post, vectorize=True,
+                              moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)])
+    s.random_state = np.random.RandomState(1).get_state()
+    s.run_mcmc(post.to_z(th0), 6000, progress=False)
+    th = post.to_theta(s.get_chain(discard=500, flat=True))
+    np.testing.assert_allclose(th.mean(axis=0), 0.0, atol=0.03 * 2.0)
+    np.testing.assert_allclose(th.var(axis=0), 2.0**2 / 12, rtol=0.10)
+
+
+def test_de_moves_in_logit_coordinates_recover_the_linear_gaussian(tmp_path):
+    """The jtire sample default (DE moves, logit coordinates) on the known posterior of the first
+    test, with bounds at +-4 prior sd (truncation changes the moments by < 0.1 %)."""
+    from jtire.calibration.posterior import UnboundedPosterior
+
+    s = np.array([0.3, 0.5, 0.4, 0.6])
+    lt = A @ np.array([0.4, -0.3, 0.2]) + B
+    space = _space(4.0)
+    post = UnboundedPosterior(LogPosterior(_Linear(), lt, s, space, "log_normal", 1.0), space)
+    mean, cov = _exact(lt, s, 1.0)
+    p0 = post.to_z(mean + 1e-3 * np.random.default_rng(0).normal(size=(32, D)))
+    res = run_sampler(post, p0, tmp_path / "c.h5", 32, 12000, 500, 100.0, seed=3, moves="de")
+    assert res.converged
+    x = post.to_theta(res.samples())
+    sd = np.sqrt(np.diag(cov))
+    np.testing.assert_allclose(x.mean(axis=0), mean, atol=0.1 * sd.min())  # as the first test
+    np.testing.assert_allclose(np.diag(np.cov(x.T)), np.diag(cov), rtol=0.12)
+
+
+def test_killed_de_chain_resumes_to_the_same_state(tmp_path):
+    """DE moves draw from the sampler's random state too: a killed run still resumes exactly."""
+    lt = A @ np.array([0.2, 0.1, -0.2]) + B
+    inner = LogPosterior(_Linear(), lt, np.full(M, 0.4), _space(), "log_normal", 1.0)
+    p0 = 0.01 * np.random.default_rng(1).normal(size=(16, D))
+    whole = run_sampler(inner, p0, tmp_path / "a.h5", 16, 700, 100, 50.0, seed=11, moves="de")
+    calls = {"n": 0}
+
+    def dies(th):
+        calls["n"] += 1
+        if calls["n"] > 250:
+            raise _Killed
+        return inner(th)
+
+    with pytest.raises(_Killed):
+        run_sampler(dies, p0, tmp_path / "b.h5", 16, 700, 100, 50.0, seed=11, moves="de")
+    resumed = run_sampler(inner, p0, tmp_path / "b.h5", 16, 700, 100, 50.0, seed=11, moves="de")
+    assert 0 < resumed.steps - resumed.n_new_steps < 700
+    np.testing.assert_array_equal(resumed.chain, whole.chain)
+
+
+def test_discrepancy_is_the_smallest_miss():
+    from types import SimpleNamespace
+
+    from jtire.calibration.sampling import discrepancy_sd
+
+    targets = [SimpleNamespace(measured=2.0), SimpleNamespace(measured=10.0)]
+    y = np.array([[2.2, 5.0], [1.9, 4.0], [np.nan, 30.0]])
+    np.testing.assert_allclose(discrepancy_sd("best_miss", targets, y),
+                               [abs(np.log(1.9 / 2.0)), abs(np.log(5.0 / 10.0))])
+    np.testing.assert_array_equal(discrepancy_sd("none", targets, y), [0.0, 0.0])
+
+
+def test_variance_calibration_gives_the_stated_coverage():
+    """400 training runs with ln-noise sd 0.01 and 100 posterior-region runs with sd 0.04: an
+    emulator fit to both (residual sd ~0.02) is overconfident where the posterior lives. The
+    k-fold factor over the 100 runs must bring the coverage of 2000 fresh ones to 90 %
+    (tolerance 8 %: the 90 % quantile of 100 |z| has a sampling sd that moves the coverage by
+    ~3 %, the 2000 fresh draws a binomial 0.7 %: ~2.5 sd)."""
+    from types import SimpleNamespace
+
+    from jtire.calibration.posterior_report import coverage
+    from jtire.calibration.sampling import calibrate_variance
+
+    rng = np.random.default_rng(3)
+    space = _space(1.0)
+    names = ("a", "b")
+    w = np.array([[0.5, -0.2, 0.3], [0.1, 0.4, -0.6]])
+
+    def runs(n, sd, lo, hi):
+        th = rng.uniform(lo, hi, (n, D))
+        return th, np.exp(th @ w.T + 1.0 + sd * rng.standard_normal((n, 2)))
+
+    spec = SimpleNamespace(calibration=SimpleNamespace(space=space, targets=[SimpleNamespace(name=n) for n in names]),
+                           check={"seed": 0, "folds": 4}, candidates=("linear",), emulator_seed=0)
+    th, y = runs(400, 0.01, -1, 1)
+    ex_t, ex_y = runs(100, 0.04, 0.2, 0.6)
+    factor, z = calibrate_variance(spec, th, y, ex_t, ex_y)
+    assert np.all(factor > 2.0)  # the uncalibrated intervals were too narrow
+    emu = fit_emulator(space, names, np.vstack([th, ex_t]), np.vstack([y, ex_y]), ("linear",))
+    emu.var_scale = factor
+    fresh_t, fresh_y = runs(2000, 0.04, 0.2, 0.6)
+    cov = coverage(emu, fresh_t, fresh_y)["coverage"]
+    for name in names:
+        assert abs(cov[name] - 0.9) < 0.08, cov

@@ -58,7 +58,8 @@ def _case_bar():
         if state["bar"] is None or state["bar"].total != total or state["bar"].n >= total:
             if state["bar"] is not None:
                 state["bar"].close()
-            state["bar"] = tqdm(total=total, desc=f"simulate {label}", unit="case", leave=False, mininterval=0)
+            state["bar"] = tqdm(total=total, desc=f"simulate {label}", leave=False, mininterval=0,
+                                unit="experiment" if label.startswith("Jacobian") else "case")
         state["bar"].update(done - state["bar"].n)
         if done >= total:
             state["bar"].close()

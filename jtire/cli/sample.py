@@ -2,7 +2,8 @@
 emulator trained on the calibration's simulator runs; the work is `jtire.calibration.sampling`).
 
 Rerun the same command to resume a killed chain. --check runs posterior draws through the
-simulator (one batch) and reports the emulator's interval coverage.
+simulator (one batch) and reports the emulator's interval coverage; where it is off, a refined
+round (those runs added to the emulator's training) runs in OUT/refined.
 """
 
 from pathlib import Path
@@ -28,7 +29,7 @@ def run_cli(args, say) -> int:
     import dataclasses
 
     from ..calibration.posterior_spec import load_posterior
-    from ..calibration.sampling import run_posterior
+    from ..calibration.sampling import COVERAGE_OK, run_posterior
     from .calibrate import simulator_for
 
     spec = load_posterior(args.config, args.set)
@@ -49,22 +50,38 @@ def run_cli(args, say) -> int:
         say(f"  {steps} steps, max tau {t}", err=True)
 
     r = run_posterior(spec, out, sim, progress)
+    _report(r, spec, say)
+    if "refined" in r:
+        c = r["check"]
+        say(f"coverage outside {COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%}: refined round (the check's "
+            f"{c['n']} simulator runs join the training set; predictive variance x "
+            + ", ".join(f"{k} {v:.3g}" for k, v in zip(r["emulator"].names,
+                                                         r["refined"]["emulator"].var_scale))
+            + f" by {spec.check['folds']}-fold cross-validation over them; fresh draws check it):")
+        _report(r["refined"], spec, say)
+    final = r.get("refined", r)
+    return 0 if final["result"].converged else 1
+
+
+def _report(r, spec, say) -> None:
     res, diag = r["result"], r["diagnostics"]
     emu = r["emulator"]
     say(f"emulator ({emu.n_points} simulator runs), leave-one-out RMSE of ln(response):")
     for name, kind in zip(emu.names, emu.kinds):
         scores = ", ".join(f"{k} {v:.3g}" for k, v in emu.loo[name].items())
         say(f"  {name}: chose {kind}  ({scores})")
-    for name, src in zip(emu.names, r["sigma_sources"]):
-        say(f"  measurement sd {name}: {src}")
+    for name, src, d in zip(emu.names, r["sigma_sources"], r["discrepancy"]):
+        extra = f"; model discrepancy sd {d:.3g} in ln ({spec.discrepancy})" if d > 0 else ""
+        say(f"  measurement sd {name}: {src}{extra}")
     verdict = ("converged" if res.converged else
                f"NOT CONVERGED: stopped at the budget of {res.steps} steps, which is not longer "
                f"than {res.n_tau:g} x max tau")
-    say(f"chain: {res.steps} steps x {res.chain.shape[1]} walkers ({res.n_new_steps} new), "
+    say(f"chain: {res.steps} steps x {res.chain.shape[1]} walkers ({res.n_new_steps} new; "
+        f"{spec.sampler['moves']} moves in {spec.sampler['coordinates']} coordinates), "
         f"max tau {np.nanmax(res.tau):.1f}: {verdict}")
     say(f"acceptance fraction {diag['acceptance_mean']:.3f} (min {diag['acceptance_min']:.3f}); "
         f"R-hat max {np.nanmax(diag['rhat']):.4f}; bulk ESS min {np.nanmin(diag['ess_bulk']):.0f}")
-    say("posterior predictive (median [90 % interval]) beside the targets:")
+    say("posterior predictive of the tire model (median [90 % interval]) beside the targets:")
     for row in r["predictive"]:
         say(f"  {row['target']:<5} {row['what']:<22} measured {row['measured']:.5g} {row['unit']:<5}"
             f" median {row['median']:.5g} [{row['lower']:.5g}, {row['upper']:.5g}]")
@@ -73,9 +90,13 @@ def run_cli(args, say) -> int:
         say(f"  {row['parameter']:<40} {row['ratio']:.3f}")
     if "check" in r:
         c = r["check"]
-        say(f"simulator check ({c['n']} of {c['n_requested']} draws, one batch): coverage of the "
+        how = "stored runs reused" if c.get("reused") else "one batch"
+        say(f"simulator check ({c['n']} of {c['n_requested']} draws, {how}): coverage of the "
             f"emulator's {c['level']:.0%} intervals: "
             + ", ".join(f"{k} {v:.2f}" for k, v in c["coverage"].items()))
-    say(f"wrote {out}/ (chain.h5, diagnostics.json, predictive.csv, widths.csv, corner.png, "
-        "emulator.json)")
-    return 0 if res.converged else 1
+    w = r["wall"]
+    say("wall time: emulator {:.1f} s, chain {:.1f} s ({} new steps){}".format(
+        w["emulator_s"], w["chain_s"], res.n_new_steps,
+        f", simulator check {w['check_s']:.1f} s" if "check_s" in w else ""))
+    say(f"wrote {r['out']}/ (chain.h5, diagnostics.json, predictive.csv, widths.csv, corner.png, "
+        "emulator.json" + (", check.json)" if "check" in r else ")"))
