@@ -24,6 +24,7 @@ resumed run killed again, then one run to the end) are marked slow.
 import json
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -248,7 +249,8 @@ def _kills(kind, references, calibration_history, tmp_path, n_kills, seed):
     assert rc == (1 if kind == "sample" else 0), Path(log).read_text()[-2000:]
     if kind == "sample":
         # the resumed run says how many steps it ran itself: none of those reported saved before
-        new = int(Path(log).read_text().split(" new)")[0].rsplit("(", 1)[1])
+        # (the first chain's report: "(N new; ..."; a refined round, if any, reports its own after it)
+        new = int(re.search(r"\((\d+) new\b", Path(log).read_text()).group(1))
         assert new <= SAMPLE_STEPS - saved_steps, (new, saved_steps)
     elif kind in ("characterize", "sweep"):  # the cases the killed runs finished were not run again
         assert _progress(kind, out, log) == total
