@@ -79,6 +79,21 @@ def _num(v):
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def _pop_choices(table, name: str, choices: dict):
+    """(the table without them, {key: value}) for the non-numeric fields {key: (allowed, default)}
+    of a table whose numeric fields a schema checks."""
+    if not isinstance(table, dict):
+        return table, {}  # validate_table says what is wrong with it
+    table, out = dict(table), {}
+    for key, (allowed, default) in choices.items():
+        v = table.pop(key, default)
+        if type(v) is not type(default) or v not in allowed:
+            what = "true or false" if isinstance(default, bool) else f"one of {allowed}"
+            raise ConfigError(f"{name}.{key} = {v!r}: must be {what}")
+        out[key] = v
+    return table, out
+
+
 def _track_sigma(target, kind: str) -> tuple:
     from ..data import analyze
 
@@ -156,14 +171,8 @@ def load_posterior(path, overrides=()) -> PosteriorSpec:
     dkind = disc.get("kind", "none")
     if dkind not in DISCREPANCY:
         raise ConfigError(f"discrepancy.kind = {dkind!r}: must be one of {DISCREPANCY}")
-    sraw = dict(raw.get("sampler", {})) if isinstance(raw.get("sampler", {}), dict) else raw["sampler"]
-    choices = {}
-    if isinstance(sraw, dict):
-        for key, allowed, default in (("moves", MOVES, "de"), ("coordinates", COORDINATES, "logit")):
-            v = sraw.pop(key, default)
-            if v not in allowed:
-                raise ConfigError(f"sampler.{key} = {v!r}: must be one of {allowed}")
-            choices[key] = v
+    sraw, choices = _pop_choices(raw.get("sampler", {}), "sampler",
+                                 {"moves": (MOVES, "de"), "coordinates": (COORDINATES, "logit")})
     sampler = {**validate_table(sraw, SAMPLER_SCHEMA, "sampler"), **choices}
     d = cal.space.d
     if sampler["walkers"] < 2 * d or sampler["walkers"] % 2:
@@ -172,11 +181,8 @@ def load_posterior(path, overrides=()) -> PosteriorSpec:
     if sampler["check_every"] > sampler["max_steps"]:
         raise ConfigError(f"sampler.check_every = {sampler['check_every']}: must be <= "
                           f"sampler.max_steps = {sampler['max_steps']}")
-    craw = dict(raw.get("check", {})) if isinstance(raw.get("check", {}), dict) else raw["check"]
-    refine = craw.pop("refine", True) if isinstance(craw, dict) else True
-    if not isinstance(refine, bool):
-        raise ConfigError(f"check.refine = {refine!r}: must be true or false")
-    check = {**validate_table(craw, CHECK_SCHEMA, "check"), "refine": refine}
+    craw, refine = _pop_choices(raw.get("check", {}), "check", {"refine": ((True, False), True)})
+    check = {**validate_table(craw, CHECK_SCHEMA, "check"), **refine}
     if check["refine"] and check["folds"] > check["draws"]:
         raise ConfigError(f"check.folds = {check['folds']}: must be <= check.draws = {check['draws']}")
     return PosteriorSpec(path=path, calibration=cal, history=Path(raw["history"]), prior=kind,

@@ -27,6 +27,7 @@ of draws (seed + 1) checks the refined emulator: the coverage it reports was not
 """
 
 import hashlib
+import time
 from pathlib import Path
 
 import numpy as np
@@ -127,8 +128,6 @@ def _round(spec, out_dir, thetas, y, disc, sim, progress, check_seed, var_scale=
     if var_scale is not None:
         fp["variance_scale"] = [float(v) for v in var_scale]
     check_fingerprint(out_dir, fp)
-    import time
-
     wall = {}
     t0 = time.perf_counter()
     emu = fit_emulator(space, [t.name for t in targets], thetas, y, spec.candidates,
