@@ -2,8 +2,11 @@
 run of the same program (after compile), for E02's deflection at 50 kN and E12's mean drag.
 
 Forward mode: `jax.jacfwd` through the experiment (one vmapped tangent per leaf: d = 42 scalar leaves of
-MaterialParams, every one a calibratable modulus, thickness, loss or friction). The steps are held at
-their values (a numerical setting, not physics). Every figure is the best of --repeat runs.
+MaterialParams, every one a calibratable modulus, thickness, loss or friction). Reverse mode: `jax.jacrev`
+with every transient phase checkpointed (diffrax RecursiveCheckpointAdjoint, 1024 stored states; the
+static solves differentiate implicitly either way). The steps are held at their values (a numerical
+setting, not physics). Every figure is the best of --repeat runs (compile excluded: each program runs
+once before it is timed).
 
     python benchmarks/bench_gradients.py                      # default mesh
     python benchmarks/bench_gradients.py --mesh 32x5x4 --short
@@ -22,6 +25,8 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--short", action="store_true", help="short E12 stages (a quick check, not the reported figure)")
     ap.add_argument("--experiments", nargs="+", default=["vertical_stiffness", "rolling_resistance"])
+    ap.add_argument("--save-dir", default="", help="save each Jacobian as grad_<experiment>_<mode>.npy here")
+    ap.add_argument("--modes", nargs="+", default=["forward", "reverse"], choices=["forward", "reverse"])
     args = ap.parse_args(argv)
 
     import jax
@@ -42,8 +47,8 @@ def main(argv=None):
              if args.short else []}
     qty = {"vertical_stiffness": "deflection_m", "rolling_resistance": "rolling_resistance_N"}
     print(f"gradient of one quantity w.r.t. all MaterialParams leaves, mesh {args.mesh}, best of {args.repeat}")
-    print("| experiment | quantity | leaves | forward run [s] | jacfwd [s] | cost / forward | value |")
-    print("|---|---|---|---|---|---|---|")
+    print("| experiment | quantity | leaves | mode | forward run [s] | gradient [s] | cost / forward | value |")
+    print("|---|---|---|---|---|---|---|---|")
     for name in args.experiments:
         rc = load_run_config(REPO / "configs" / "experiments" / f"{name}.toml", mesh + extra.get(name, []))
         tire = make_tire(rc.tire)
@@ -55,23 +60,28 @@ def main(argv=None):
         def forward():
             return batch.run(exp, tire, [rc.condition])[0]
 
-        def gradient():
-            return traced_jacobian(exp, tire, params_of, theta0, [rc.condition], [qty[name]])
-
         res = forward()
-        g = gradient()
-        tf, tg = [], []
+        tf = []
         for _ in range(args.repeat):
             t0 = time.perf_counter()
             forward()
             tf.append(time.perf_counter() - t0)
-            t0 = time.perf_counter()
-            v, J = gradient()
-            tg.append(time.perf_counter() - t0)
-        f, gg = min(tf), min(tg)
-        print(f"| {name} | {qty[name]} | {flat.size} | {f:.1f} | {gg:.1f} | {gg / f:.1f} | {float(v[0]):.6g} "
-              f"(host {res.quantities[qty[name]]:.6g}) |", flush=True)
-        del g
+        f = min(tf)
+        for mode in args.modes:
+            def gradient():
+                return traced_jacobian(exp, tire, params_of, theta0, [rc.condition], [qty[name]], mode=mode)
+
+            gradient()
+            tg = []
+            for _ in range(args.repeat):
+                t0 = time.perf_counter()
+                v, J = gradient()
+                tg.append(time.perf_counter() - t0)
+            gg = min(tg)
+            print(f"| {name} | {qty[name]} | {flat.size} | {mode} | {f:.1f} | {gg:.1f} | {gg / f:.1f} | "
+                  f"{float(v[0]):.6g} (host {res.quantities[qty[name]]:.6g}) |", flush=True)
+            if args.save_dir:
+                np.save(Path(args.save_dir) / f"grad_{name}_{mode}.npy", J)
 
 
 if __name__ == "__main__":

@@ -7,14 +7,15 @@ responses, and to Jacobian calls. One record per evaluated point:
     {"method": "arsm", "seed": 0, "eval": 7, "batch": 1, "phase": "minimizer",
      "theta": [...d], "params": {name: SI value}, "responses": {name: SI value or null},
      "errors_pct": {name: ...}, "total_error_pct": 12.3, "cost_forward": 1.0,
-     "batch_wall_s": 0.8, "batch_size": 4, ...extras}
+     "batch_wall_s": 0.8, "batch_size": 4, "piece": 0, ...extras}
 
 A Jacobian call adds "jacobian": [[...d] x m] and costs the simulator's stated forward-run
-equivalents. The records of a batch are written as soon as the batch returns. Resume: asked for
-a batch, the log hands back the recorded rows for the points it already holds (checking that
-each requested theta is the recorded one) and sends only the missing points to the simulator,
-as one batch; the optimizers are deterministic given their records, so nothing is lost or
-repeated.
+equivalents. A batch goes to the simulator in pieces of its `points_per_call` (all at once when
+that is 0); the records of a piece are written as soon as it returns ("batch_wall_s" and
+"batch_size" are the piece's). Resume: asked for a batch, the log hands back the recorded rows for
+the points it already holds (checking that each requested theta is the recorded one) and sends
+only the missing points to the simulator; the optimizers are deterministic given their records,
+so nothing is lost or repeated, and a kill inside a batch loses only the piece in flight.
 
 The output folder also carries `fingerprint.json`: everything that determines the numbers
 (config, tire, simulator description, code version). A run in a folder made by other settings
@@ -28,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .history import BudgetExhausted
-from .simulator import check_batch
+from .simulator import check_batch, pieces
 from .targets import percent_errors
 from ..errors import ConfigError
 from ..io import append_jsonl, atomic_write_json, atomic_write_text, read_jsonl, remove_stale_temps
@@ -124,9 +125,10 @@ class RunLog:
     def wall_s(self) -> float:
         """Simulator wall time of the records, each batch counted once."""
         seen, total = set(), 0.0
-        for r in self.records:
-            if r["batch"] not in seen:
-                seen.add(r["batch"])
+        for r in self.records:  # a batch's pieces each have their own wall time
+            key = (r["batch"], r.get("piece", 0))
+            if key not in seen:
+                seen.add(key)
                 total += float(r.get("batch_wall_s", 0.0))
         return total
 
@@ -161,7 +163,8 @@ class RunLog:
         return rec
 
     def evaluate(self, thetas, phase, extras=None) -> np.ndarray:
-        """Responses (n, m) of the points thetas (n, d), as one batch; replayed where recorded.
+        """Responses (n, m) of the points thetas (n, d), one batch (sent in pieces of the simulator's
+        points_per_call); replayed where recorded.
 
         phase: a label for every record (str) or one per point (list of n str).
         extras: optional list of n dicts of JSON-able fields for the records. Raises
@@ -188,21 +191,24 @@ class RunLog:
                 todo.append(i)
         batch = self.n_batches
         self.n_batches += 1
-        new = {}
-        if todo:
+        for i in range(n):  # the replay is a prefix of the run: recorded points come first
+            if i not in todo:
+                self.records.append(self._replay[start + i])
+        # the new points go to the simulator in pieces of its points_per_call, each recorded the
+        # moment it returns (in evaluation order): a kill loses at most the piece in flight
+        cost = self.sim.cost_forward_equivalents.get("evaluate", 1.0)
+        for c, (a, b) in enumerate(pieces(self.sim, len(todo))):
+            idx = todo[a:b]
             t0 = time.perf_counter()
-            vals = check_batch(self.sim, thetas[todo], self.sim.evaluate(thetas[todo]))
+            vals = check_batch(self.sim, thetas[idx], self.sim.evaluate(thetas[idx]))
             wall = time.perf_counter() - t0
-            cost = self.sim.cost_forward_equivalents.get("evaluate", 1.0)
-            for j, i in enumerate(todo):
+            for j, i in enumerate(idx):
                 out[i] = vals[j]
-                new[i] = self._record(start + i, thetas[i], vals[j], phases[i], batch, wall, len(todo), cost,
-                                      extras[i])
-        for i in range(n):  # in order, so the file is in evaluation order
-            rec = self._replay[start + i] if i not in new else new[i]
-            if i in new and self.path is not None:
-                append_jsonl(self.path, rec)
-            self.records.append(rec)
+                rec = self._record(start + i, thetas[i], vals[j], phases[i], batch, wall, len(idx), cost,
+                                   {"piece": c, **extras[i]})
+                if self.path is not None:
+                    append_jsonl(self.path, rec)
+                self.records.append(rec)
         return out
 
     def jacobian(self, theta, phase: str = "jacobian", extra=None):

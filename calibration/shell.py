@@ -72,6 +72,15 @@ class ShellSimulator(Simulator):
             else:
                 self.groups.append({"key": key, "exp": exp, "targets": [(j, t)]})
         self.cost_forward_equivalents = {"evaluate": 1.0, "jacobian": float("nan")}
+        # A call holds as many points as fill the devices once with the most conditions any
+        # transient target asks per point (E12's two loads: one point per 2 cores); the static
+        # solves run case by case anyway. Long jobs evaluate in pieces of this size and save each
+        # as it returns. It costs no speed: 16 E12 cases on the default mesh took 9.37 s per case
+        # one per device per call and 9.94 s all at once, 8 vmapped per device
+        # (benchmarks/bench_batch.py --experiments rolling_resistance --cases 16 --modes sharded sharded-1).
+        n_dev = len(jax.devices()) if devices is None else int(devices)
+        per_point = max([len(g["targets"]) for g in self.groups if g["exp"].shardable] or [1])
+        self.points_per_call = max(1, n_dev // per_point)
         self.last_wall = {}
         # on_case(label, n_done, n_total): called as each case of an evaluation finishes (the CLI
         # draws a progress bar with it: an initial ARSM batch is ~40 default-mesh cases, minutes)
@@ -150,9 +159,13 @@ class ShellSimulator(Simulator):
         return values, J
 
 
-def traced_jacobian(exp, tire, params_of, theta, conditions, quantities):
+def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: str = "forward"):
     """Values (k,) and Jacobian (k, d) of `quantities` (one per condition, paired in order) of `exp`
-    with respect to theta, by jax.jacfwd through the simulation (steps held at their values)."""
+    with respect to theta, through the simulation (steps held at their values).
+
+    mode "forward": jax.jacfwd (d tangents carried along one run; stores nothing). "reverse":
+    jax.jacrev with every transient phase checkpointed (`experiments.program.reverse_mode`): one
+    backward sweep per quantity, whatever d is."""
     model = tire.model
     base = params_of(theta)
     flat = [(i, c) for i, cond in enumerate(conditions) for c in exp.cases(cond)]
@@ -182,7 +195,16 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities):
         v = f(th)
         return v, v
 
-    J, v = jax.jacfwd(with_value, has_aux=True)(jnp.asarray(theta, dtype=jnp.float64))
+    th0 = jnp.asarray(theta, dtype=jnp.float64)
+    if mode == "forward":
+        J, v = jax.jacfwd(with_value, has_aux=True)(th0)
+    elif mode == "reverse":
+        from ..experiments.program import reverse_mode
+
+        with reverse_mode():
+            J, v = jax.jacrev(with_value, has_aux=True)(th0)
+    else:
+        raise ValueError(f"mode {mode!r}: forward or reverse")
     return np.asarray(v), np.asarray(J)
 
 

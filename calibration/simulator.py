@@ -15,6 +15,11 @@ Contract (what an implementation must provide):
     evaluate(thetas (n, d)) -> (n, m)       SI responses of one batch (a calibration iteration's
                                             design points run together); a point whose run
                                             failed is a row of nan (the batch goes on)
+    points_per_call: int                    how many points one evaluate call should hold for
+                                            full speed (0: any number). Long jobs (ARSM's history,
+                                            the posterior check) call evaluate in pieces of this
+                                            size and save each piece as it returns, so a kill
+                                            loses at most one piece
     jacobian(theta (d,), quantities=None) -> (values (q,), J (q, d))
                                             d(quantity)/d(theta) by autodiff at one point;
                                             quantities=None means response_names; any other name
@@ -36,7 +41,7 @@ import numpy as np
 
 from .space import ParamSpace
 
-__all__ = ["Simulator", "check_batch"]
+__all__ = ["Simulator", "check_batch", "pieces"]
 
 
 class Simulator(abc.ABC):
@@ -45,6 +50,7 @@ class Simulator(abc.ABC):
     space: ParamSpace
     response_names: tuple
     cost_forward_equivalents: dict = {"evaluate": 1.0, "jacobian": float("nan")}
+    points_per_call: int = 0
 
     @abc.abstractmethod
     def evaluate(self, thetas) -> np.ndarray:
@@ -66,3 +72,11 @@ def check_batch(sim: Simulator, thetas, values) -> np.ndarray:
         raise RuntimeError(f"{type(sim).__name__}.evaluate returned shape {values.shape} for "
                            f"{n} points; must be ({n}, {m})")
     return values
+
+
+def pieces(sim: Simulator, n: int) -> list:
+    """Index ranges [(start, stop), ...] covering n points in evaluate calls of the simulator's
+    points_per_call (one range when it is 0)."""
+    per = int(getattr(sim, "points_per_call", 0) or 0)
+    per = n if per <= 0 else per
+    return [(s, min(s + per, n)) for s in range(0, n, max(per, 1))]

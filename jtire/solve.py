@@ -171,7 +171,8 @@ class PhaseResult(eqx.Module):
     frames: dict = None  # frame fields at frame_ts (None unless asked for: `jtire run --frames`)
 
 
-def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_steps: int, frame_ts=None):
+def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_steps: int, frame_ts=None,
+              adjoint=None):
     """Integrate one phase from t0 to at most t1 (traced scalars); save `observe` at ts.
 
     Stops early when settled (t >= settle_after and KE < ke_tol) or unstable. Pass
@@ -182,6 +183,8 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
     frame_ts: optional times at which to also save whole frames (`jtire.frames.frame_fields`: nodes,
     contact pressure on the phase's own surface, strain-energy density, rim pose); samples after an
     early end are inf. None (the default) adds nothing to the program.
+    adjoint: None (forward mode) or a diffrax adjoint for reverse mode (`experiments.program.reverse_mode`:
+    RecursiveCheckpointAdjoint, a fixed number of stored states, the rest recomputed).
     """
     def blow(t, y, args, **kw):
         speed = jnp.max(jnp.maximum(jnp.maximum(jnp.abs(y.v.x), jnp.abs(y.v.y)), jnp.abs(y.v.z)))
@@ -207,7 +210,7 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
         term, SymplecticEuler(), t0, t1, drive.dt, y0, args=(model, params, drive), saveat=saveat,
         stepsize_controller=diffrax.ConstantStepSize(), max_steps=max_steps,
         event=diffrax.Event([blow, settled]), throw=False,
-        adjoint=diffrax.ForwardMode(),
+        adjoint=diffrax.ForwardMode() if adjoint is None else adjoint,
     )
     y_end = jax.tree_util.tree_map(lambda a: a[0], sol.ys[0])
     mask = sol.event_mask if sol.event_mask is not None else [jnp.array(False), jnp.array(False)]

@@ -135,6 +135,35 @@ def test_killed_run_resumes_with_nothing_lost_or_repeated(tmp_path, synthetic):
     assert fresh.n_points == 30 - (len(lines) - 2)
 
 
+def test_a_killed_batch_keeps_its_finished_pieces(tmp_path, synthetic):
+    """A simulator that wants 3 points per call (as the shell model does, to fill the cores once):
+    the initial batch goes in pieces, each recorded as it returns, so a kill inside a batch loses
+    only the piece in flight, and the resumed run ends with the same history."""
+    sp, tg, sim = synthetic
+    # every run in pieces of 3 (the stand-in's vmapped batches differ in the last bits with the
+    # batch's size, which would move the surfaces' later points by ~1e-13)
+    sim = StandinSimulator(sp, sim.base, tg)
+    sim.points_per_call = 3
+    whole = calibrate_arsm(sim, tg, RunLog(sim, tg, None, "arsm", 0, 30, tmp_path / "a.jsonl"), seed=0)
+    dies = _Dies(sp, sim.base, tg, after=7)
+    dies.points_per_call = 3
+    with pytest.raises(_Killed):
+        calibrate_arsm(dies, tg, RunLog(dies, tg, None, "arsm", 0, 30, tmp_path / "b.jsonl"), seed=0)
+    # the initial batch (6 points) went in two pieces; the kill came in the second piece of the next
+    # batch (4 points): its first piece is kept
+    assert dies.batches == [3, 3, 3]
+    kept = load_records(tmp_path / "b.jsonl")
+    assert [(r["batch"], r["piece"]) for r in kept] == [(0, 0)] * 3 + [(0, 1)] * 3 + [(1, 0)] * 3
+    fresh = StandinSimulator(sp, sim.base, tg)
+    fresh.points_per_call = 3
+    res = calibrate_arsm(fresh, tg, RunLog(fresh, tg, None, "arsm", 0, 30, tmp_path / "b.jsonl"), seed=0)
+    assert fresh.n_points == 30 - 9  # nothing the killed run finished is run again
+    a, b = load_records(tmp_path / "a.jsonl"), load_records(tmp_path / "b.jsonl")
+    assert [r["theta"] for r in a] == [r["theta"] for r in b]
+    assert [r["responses"] for r in a] == [r["responses"] for r in b]
+    np.testing.assert_array_equal(res.theta, whole.theta)
+
+
 def test_run_calibration_outputs_and_fingerprint(tmp_path, study):
     sim = StandinSimulator(study.space, study.base_params, study.targets)
     res, paths = run_calibration(study, sim, tmp_path, budget=26)

@@ -197,5 +197,5 @@ def test_sample_check_refines_and_resumes_without_rerunning(tmp_path, capsys):
     before = (out / "refined" / "predictive.csv").read_text()
     main(argv)
     again = capsys.readouterr().out
-    assert again.count("stored runs reused") == 2 and "one batch" not in again
+    assert again.count("stored runs reused") == 2 and "simulated" not in again
     assert (out / "refined" / "predictive.csv").read_text() == before

@@ -1,9 +1,10 @@
 """`jtire sample CONFIG`: the posterior of a calibration's free parameters (emcee through an
 emulator trained on the calibration's simulator runs; the work is `jtire.calibration.sampling`).
 
-Rerun the same command to resume a killed chain. --check runs posterior draws through the
-simulator (one batch) and reports the emulator's interval coverage; where it is off, a refined
-round (those runs added to the emulator's training) runs in OUT/refined.
+Rerun the same command to resume a killed chain or check. --check runs posterior draws through the
+simulator (in pieces that fill the cores once, each saved as it returns: OUT/check_runs.jsonl) and
+reports the emulator's interval coverage; where it is off, a refined round (those runs added to
+the emulator's training) runs in OUT/refined.
 """
 
 from pathlib import Path
@@ -40,6 +41,7 @@ def run_cli(args, say) -> int:
         sim = simulator_for(spec.calibration, args.standin, say)
         if sim is None:
             return 2
+        sim.on_case = None  # the check draws its own bar, one step per posterior draw
     out = Path(args.out) if args.out else Path("runs") / "sample" / Path(args.config).stem
     from ..io import check_writable
 
@@ -49,7 +51,7 @@ def run_cli(args, say) -> int:
         t = f"{np.max(tau):.1f}" if np.all(np.isfinite(tau)) else "n/a"
         say(f"  {steps} steps, max tau {t}", err=True)
 
-    r = run_posterior(spec, out, sim, progress)
+    r = run_posterior(spec, out, sim, progress, _draw_bar())
     _report(r, spec, say)
     if "refined" in r:
         c = r["check"]
@@ -61,6 +63,28 @@ def run_cli(args, say) -> int:
         _report(r["refined"], spec, say)
     final = r.get("refined", r)
     return 0 if final["result"].converged else 1
+
+
+def _draw_bar():
+    """on_check for run_posterior: a tqdm bar over the check's posterior draws (minutes each at the
+    default mesh); draws reused from an earlier, killed check are counted at the start."""
+    from tqdm import tqdm
+
+    state = {"bar": None}
+
+    def on_check(done, total, reused):
+        bar = state["bar"]
+        if bar is None or bar.total != total or bar.n > done:
+            if bar is not None:
+                bar.close()
+            bar = state["bar"] = tqdm(total=total, desc="simulator check", unit="draw", mininterval=0,
+                                      initial=done, postfix=f"{reused} reused" if reused else None)
+        bar.update(done - bar.n)
+        if done >= total:
+            bar.close()
+            state["bar"] = None
+
+    return on_check
 
 
 def _report(r, spec, say) -> None:
@@ -90,7 +114,9 @@ def _report(r, spec, say) -> None:
         say(f"  {row['parameter']:<40} {row['ratio']:.3f}")
     if "check" in r:
         c = r["check"]
-        how = "stored runs reused" if c.get("reused") else "one batch"
+        k = int(c.get("reused", 0))
+        how = ("stored runs reused" if k >= c["n_requested"] else
+               f"{k} stored runs reused, {c['n_requested'] - k} simulated" if k else "simulated")
         say(f"simulator check ({c['n']} of {c['n_requested']} draws, {how}): coverage of the "
             f"emulator's {c['level']:.0%} intervals: "
             + ", ".join(f"{k} {v:.2f}" for k, v in c["coverage"].items()))

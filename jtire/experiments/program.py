@@ -62,13 +62,13 @@ def f64(x):
     return jnp.asarray(x, dtype=jnp.float64)
 
 
-def _run_one(model, params, ph: Phase, t, ke_tol, n_save: int, n_frames: int = 0):
+def _run_one(model, params, ph: Phase, t, ke_tol, n_save: int, n_frames: int = 0, adjoint=None):
     """One phase from its branch's description: integrate, summarize. Returns (PhaseOut, end state)."""
     t1 = t + ph.duration
     ts = jnp.linspace(t, t1, n_save)
     frame_ts = jnp.linspace(t, t1, n_frames) if n_frames else None
     res = solve.run_phase(model, params, ph.drive, ph.y0, t, t1, ts, t + ph.settle_after, ke_tol, solve.MAX_STEPS,
-                          frame_ts)
+                          frame_ts, adjoint)
     v = res.y.v
     speed = jnp.sqrt(v.x**2 + v.y**2 + v.z**2)
     speed = jnp.where(jnp.isfinite(speed), speed, jnp.inf)
@@ -123,6 +123,26 @@ def recording_frames(n: int):
         _N_FRAMES.reset(token)
 
 
+_ADJOINT = contextvars.ContextVar("jtire_adjoint", default=None)
+
+
+@contextlib.contextmanager
+def reverse_mode(checkpoints: int = 1024):
+    """Within this block every transient phase is traced for reverse-mode autodiff (jax.grad, jacrev,
+    vjp): diffrax's RecursiveCheckpointAdjoint keeps `checkpoints` states of the phase and recomputes
+    the steps between them on the way back (treeverse: with c states and n steps each step is run
+    about r + 1 times, r the smallest with C(c + r, r) >= n; for the default 1024 states and E12's
+    ~20,000 steps, r = 2). Memory: c states (~0.2 MB each at the default mesh). Outside the block the
+    phases use forward mode (jvp / jacfwd), which stores nothing. A separate compiled program."""
+    import diffrax
+
+    token = _ADJOINT.set(diffrax.RecursiveCheckpointAdjoint(checkpoints=int(checkpoints)))
+    try:
+        yield
+    finally:
+        _ADJOINT.reset(token)
+
+
 def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
     """Run `branches` in order from state y0 at t = 0. Returns (PhaseOut stacked over phases, the
     end state of the last phase, mem).
@@ -145,7 +165,7 @@ def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
         # state) compiled a program of its own, and sharded batches traced it again per pattern.
         z = 0.0 * ph.drive.dt
         ph = jax.tree_util.tree_map(lambda a: a + z.astype(a.dtype), ph)
-        out, y = run_one(model, params, ph, t + z, ke_tol + z, n_save, _N_FRAMES.get())
+        out, y = run_one(model, params, ph, t + z, ke_tol + z, n_save, _N_FRAMES.get(), _ADJOINT.get())
         outs.append(out)
         t = out.t_end
     return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *outs), y, mem
