@@ -10,6 +10,9 @@ once before it is timed).
 
     python benchmarks/bench_gradients.py                      # default mesh
     python benchmarks/bench_gradients.py --mesh 32x5x4 --short
+    python benchmarks/bench_gradients.py --calibration configs/calibration/study.toml --repeat 1
+        # the calibration's target Jacobian (ShellSimulator.jacobian: forward mode through the static
+        # solves, reverse mode through E12) against one evaluation of the same targets
 """
 
 import argparse
@@ -25,6 +28,7 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=2)
     ap.add_argument("--short", action="store_true", help="short E12 stages (a quick check, not the reported figure)")
     ap.add_argument("--experiments", nargs="+", default=["vertical_stiffness", "rolling_resistance"])
+    ap.add_argument("--calibration", default="", help="price this calibration config's target Jacobian instead")
     ap.add_argument("--save-dir", default="", help="save each Jacobian as grad_<experiment>_<mode>.npy here")
     ap.add_argument("--modes", nargs="+", default=["forward", "reverse"], choices=["forward", "reverse"])
     args = ap.parse_args(argv)
@@ -41,6 +45,8 @@ def main(argv=None):
 
     nt, ns, nc = (int(v) for v in args.mesh.split("x"))
     mesh = [f"tire.mesh.n_theta={nt}", f"tire.mesh.n_side={ns}", f"tire.mesh.n_crown={nc}"]
+    if args.calibration:
+        return calibration_jacobian(args, mesh)
     extra = {"vertical_stiffness": ["vertical_stiffness.stated_load_kN=50"],
              "rolling_resistance": ["rolling_resistance.settle_s=0.02", "rolling_resistance.ramp_s=0.02",
                                     "rolling_resistance.release_s=0.01", "rolling_resistance.measure_s=0.03"]
@@ -82,6 +88,47 @@ def main(argv=None):
                   f"{float(v[0]):.6g} (host {res.quantities[qty[name]]:.6g}) |", flush=True)
             if args.save_dir:
                 np.save(Path(args.save_dir) / f"grad_{name}_{mode}.npy", J)
+
+
+def calibration_jacobian(args, mesh):
+    """The m x d Jacobian of a calibration's targets at the base tire, first call (compiles) and
+    after, against one evaluation of the targets (after compile)."""
+    import numpy as np
+
+    import jtire  # noqa: F401
+    from jtire.calibration.shell import ShellSimulator
+    from jtire.calibration.spec import load_calibration
+
+    spec = load_calibration(args.calibration, mesh)
+    sim = ShellSimulator(spec, spec.tire)
+    theta = np.asarray(spec.space.from_params(spec.base_params))
+    t0 = time.perf_counter()
+    sim.evaluate(theta[None])
+    first_eval = time.perf_counter() - t0
+    te = []
+    for _ in range(args.repeat):
+        t0 = time.perf_counter()
+        y = sim.evaluate(theta[None])[0]
+        te.append(time.perf_counter() - t0)
+    tj = []
+    for k in range(args.repeat + 1):
+        t0 = time.perf_counter()
+        v, J = sim.jacobian(theta)
+        tj.append(time.perf_counter() - t0)
+        split = dict(sim.last_wall)
+    e, j = min(te), min(tj[1:])
+    print(f"target Jacobian of {args.calibration}, mesh {args.mesh}: {J.shape[0]} targets x {J.shape[1]} parameters")
+    print("| what | wall [s] | forward-run equivalents |")
+    print("|---|---|---|")
+    print(f"| one evaluation of the targets (first call, compiles) | {first_eval:.1f} | |")
+    print(f"| one evaluation of the targets | {e:.1f} | 1 |")
+    print(f"| Jacobian, first call (compiles) | {tj[0]:.1f} | {tj[0] / e:.1f} |")
+    print(f"| Jacobian | {j:.1f} | {j / e:.1f} |")
+    print("values by the Jacobian's programs vs the evaluation: "
+          + ", ".join(f"{n} {a:.6g} / {b:.6g}" for n, a, b in zip(sim.response_names, v, y)))
+    print("wall split of the last Jacobian [s]: " + ", ".join(f"{k} {w:.1f}" for k, w in split.items()))
+    if args.save_dir:
+        np.save(Path(args.save_dir) / "jacobian_targets.npy", J)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@
     [emulator]   candidates = ["linear", "reduced", "full", "gp"], seed
     [sampler]    walkers, max_steps, check_every, n_tau, seed, init_spread,
                  moves = "de" | "stretch", coordinates = "logit" | "log"
-    [check]      draws, seed, refine = true | false, folds
+    [check]      draws, seed, refine = true | false, folds, rounds (refined rounds at most)
 """
 
 import dataclasses
@@ -41,7 +41,7 @@ SAMPLER_SCHEMA = {
     "init_spread": F(float, 1, 1e-8, 1, 1e-3, "(unit box)"),
 }
 CHECK_SCHEMA = {"draws": F(int, 1, 1, 100000, 32), "seed": F(int, 1, 0, 2**31 - 1, 0),
-                "folds": F(int, 1, 2, 1000, 4)}
+                "folds": F(int, 1, 2, 1000, 4), "rounds": F(int, 1, 1, 10, 2, "refined rounds at most")}
 
 
 @dataclasses.dataclass(frozen=True)

@@ -3,9 +3,10 @@
 `ShellSimulator` implements `calibration.simulator.Simulator` on the batch runner: a batch of
 log-parameter vectors becomes one batch per experiment the targets use (every parameter set x every
 condition of that experiment, vmapped and sharded over the devices), reduced on the host exactly as
-`jtire run` reduces it. Its Jacobian is forward-mode autodiff through the same programs (vmapped
-tangents, one per free parameter) with the experiments' traced reductions (`Experiment.traced`); the
-explicit step of each case is held fixed (it is a numerical setting, not physics).
+`jtire run` reduces it. Its Jacobian is autodiff through the same programs with the experiments'
+traced reductions (`Experiment.traced`): forward mode (vmapped tangents, one per free parameter)
+through the static solves, reverse mode (checkpointed) through the transients; the explicit step of
+each case is held fixed (it is a numerical setting, not physics).
 
 Sensitivity quantities beyond the targets (k_sv, k_l, k_by, k_btheta, k_bgamma, k_f, k_m, footprint
 length and width, rolling resistance) come from the experiments' traced reductions at the rated
@@ -82,6 +83,7 @@ class ShellSimulator(Simulator):
         per_point = max([len(g["targets"]) for g in self.groups if g["exp"].shardable] or [1])
         self.points_per_call = max(1, n_dev // per_point)
         self.last_wall = {}
+        self.jacobian_modes = {}  # experiment name -> "forward" / "reverse" (default: see jacobian)
         # on_case(label, n_done, n_total): called as each case of an evaluation finishes (the CLI
         # draws a progress bar with it: an initial ARSM batch is ~40 default-mesh cases, minutes)
         self.on_case = None
@@ -127,7 +129,12 @@ class ShellSimulator(Simulator):
         return out
 
     def jacobian(self, theta, quantities=None):
-        """(values (q,), J (q, d)) by forward-mode autodiff (jacfwd: one tangent per parameter)."""
+        """(values (q,), J (q, d)) by autodiff, per experiment in the cheaper mode: forward mode
+        (jacfwd, one tangent per parameter) through the static solves, whose tangents share one
+        factorization (implicit differentiation); reverse mode (jacrev, one checkpointed backward
+        sweep per quantity) through a transient when it has fewer quantities than there are
+        parameters (E12: 2 quantities against 20 parameters). `jacobian_modes` overrides per
+        experiment name ("forward" / "reverse")."""
         theta = np.asarray(theta, float)
         if quantities is None:
             jobs = [(g["exp"], [t.condition for _, t in g["targets"]], [t.quantity for _, t in g["targets"]],
@@ -146,11 +153,15 @@ class ShellSimulator(Simulator):
         values = np.full(len(names), np.nan)
         J = np.full((len(names), self.space.d), np.nan)
         t0 = time.perf_counter()
-        label = f"Jacobian ({self.space.d} tangents; one experiment at a time)"
+        label = f"Jacobian ({self.space.d} parameters; one experiment at a time)"
         for k, (exp, conds, qs, idx) in enumerate(jobs):
             if self.on_case is not None:
                 self.on_case(label, k, len(jobs))
-            v, jac = traced_jacobian(exp, self.tire, self.params, theta, conds, qs)
+            mode = self.jacobian_modes.get(exp.name) or (
+                "reverse" if exp.shardable and len(qs) < self.space.d else "forward")
+            t1 = time.perf_counter()
+            v, jac = traced_jacobian(exp, self.tire, self.params, theta, conds, qs, mode=mode)
+            self.last_wall[f"jacobian {exp.name} ({mode})"] = time.perf_counter() - t1
             values[idx] = v
             J[idx] = jac
         if self.on_case is not None:
@@ -166,6 +177,11 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: s
     mode "forward": jax.jacfwd (d tangents carried along one run; stores nothing). "reverse":
     jax.jacrev with every transient phase checkpointed (`experiments.program.reverse_mode`): one
     backward sweep per quantity, whatever d is."""
+    if mode == "reverse" and len(conditions) > 1:
+        # one backward sweep per condition, one after another: a sweep of E12 on the default mesh
+        # peaked at 14.6 GB for one case (benchmarks/bench_gradients.py); a vmapped pair would double it
+        parts = [traced_jacobian(exp, tire, params_of, theta, [c], [q], mode) for c, q in zip(conditions, quantities)]
+        return np.concatenate([v for v, _ in parts]), np.concatenate([j for _, j in parts])
     model = tire.model
     base = params_of(theta)
     flat = [(i, c) for i, cond in enumerate(conditions) for c in exp.cases(cond)]

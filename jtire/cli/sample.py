@@ -4,7 +4,8 @@ emulator trained on the calibration's simulator runs; the work is `jtire.calibra
 Rerun the same command to resume a killed chain or check. --check runs posterior draws through the
 simulator (in pieces that fill the cores once, each saved as it returns: OUT/check_runs.jsonl) and
 reports the emulator's interval coverage; where it is off, a refined round (those runs added to
-the emulator's training) runs in OUT/refined.
+the emulator's training) runs in OUT/refined, and while it is still off, up to [check] rounds in
+all (OUT/refined_2, ...).
 """
 
 from pathlib import Path
@@ -53,15 +54,19 @@ def run_cli(args, say) -> int:
 
     r = run_posterior(spec, out, sim, progress, _draw_bar())
     _report(r, spec, say)
-    if "refined" in r:
-        c = r["check"]
-        say(f"coverage outside {COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%}: refined round (the check's "
-            f"{c['n']} simulator runs join the training set; predictive variance x "
-            + ", ".join(f"{k} {v:.3g}" for k, v in zip(r["emulator"].names,
-                                                         r["refined"]["emulator"].var_scale))
+    for k, ref in enumerate(r["rounds"][1:], start=1):
+        say(f"coverage outside {COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%}: refined round {k} of at most "
+            f"{spec.check['rounds']} (every check run so far, {ref['n_check_runs']}, joins the training set; "
+            "predictive variance x "
+            + ", ".join(f"{n} {v:.3g}" for n, v in zip(r["emulator"].names, ref["emulator"].var_scale))
             + f" by {spec.check['folds']}-fold cross-validation over them; fresh draws check it):")
-        _report(r["refined"], spec, say)
-    final = r.get("refined", r)
+        _report(ref, spec, say)
+    final = r["rounds"][-1]
+    if "check" in final and len(r["rounds"]) > 1 and any(
+            not (COVERAGE_OK[0] <= v <= COVERAGE_OK[1]) for v in final["check"]["coverage"].values()):
+        say(f"coverage still outside {COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%} after {len(r['rounds']) - 1} "
+            "refined round(s) (check.rounds): the emulator's intervals for those responses are not trustworthy "
+            "at the stated level")
     return 0 if final["result"].converged else 1
 
 
@@ -79,7 +84,8 @@ def _draw_bar():
                 bar.close()
             bar = state["bar"] = tqdm(total=total, desc="simulator check", unit="draw", mininterval=0,
                                       initial=done, postfix=f"{reused} reused" if reused else None)
-        bar.update(done - bar.n)
+        if done > bar.n:
+            bar.update(done - bar.n)
         if done >= total:
             bar.close()
             state["bar"] = None
