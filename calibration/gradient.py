@@ -18,8 +18,10 @@ step costs, and it has no bounds. Forty lines of LM keep every call visible and 
 
 Cost: every iteration calls jacobian once at the trial point (values and J together), rejected
 trials included; each call is recorded with its forward-run equivalents
-(`Simulator.cost_forward_equivalents["jacobian"]`) and wall time, in the same history format as
-ARSM, so a killed run resumes by replay.
+(`Simulator.cost_forward_equivalents["jacobian"]`; the shell model measures it: the call's wall
+time over a timed forward evaluation of the same targets, its first call charged the two reference
+evaluations and its compiling) and wall time, in the same history format as ARSM, so a killed run
+resumes by replay.
 """
 
 import numpy as np

@@ -231,6 +231,8 @@ class RunLog:
         t0 = time.perf_counter()
         vals, jac = self.sim.jacobian(np.asarray(theta, float))
         wall = time.perf_counter() - t0
+        # a simulator that measures its Jacobian's price (the shell model) states it after the call
+        cost = float(self.sim.cost_forward_equivalents.get("jacobian", np.nan))
         vals, jac = np.asarray(vals, float), np.asarray(jac, float)
         rec = self._record(i, theta, vals, phase, batch, wall, 1, cost if np.isfinite(cost) else 0.0,
                            {"jacobian": jac.tolist(), **(extra or {})})

@@ -11,7 +11,8 @@ Contract (what an implementation must provide):
     response_names: tuple[str, ...]         the m responses, in the order of the targets
     cost_forward_equivalents: dict          {"evaluate": cost of one point, "jacobian": cost of
                                             one jacobian call}, in forward runs of one point;
-                                            used for reporting only
+                                            for reporting and the LM budget; may be updated by
+                                            each call (a measured price is read after it)
     evaluate(thetas (n, d)) -> (n, m)       SI responses of one batch (a calibration iteration's
                                             design points run together); a point whose run
                                             failed is a row of nan (the batch goes on)
