@@ -60,7 +60,8 @@ def _case_bar():
                 state["bar"].close()
             state["bar"] = tqdm(total=total, desc=f"simulate {label}", leave=False, mininterval=0,
                                 unit="experiment" if label.startswith("Jacobian") else "case")
-        state["bar"].update(done - state["bar"].n)
+        if done > state["bar"].n:  # (a bar prints when made: an update by 0 printed it twice)
+            state["bar"].update(done - state["bar"].n)
         if done >= total:
             state["bar"].close()
 

@@ -84,7 +84,7 @@ def _draw_bar():
                 bar.close()
             bar = state["bar"] = tqdm(total=total, desc="simulator check", unit="draw", mininterval=0,
                                       initial=done, postfix=f"{reused} reused" if reused else None)
-        if done > bar.n:
+        if done > bar.n:  # (a bar prints when made: an update by 0 printed it twice)
             bar.update(done - bar.n)
         if done >= total:
             bar.close()
