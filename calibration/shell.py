@@ -194,7 +194,8 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: s
     backward sweep per quantity, whatever d is."""
     if mode == "reverse" and len(conditions) > 1:
         # one backward sweep per condition, one after another: a sweep of E12 on the default mesh
-        # peaked at 14.6 GB for one case (benchmarks/bench_gradients.py); a vmapped pair would double it
+        # peaked at 14.6 GB for one case (benchmarks/bench_gradients.py); a vmapped pair would hold both
+        # at once (not tried)
         parts = [traced_jacobian(exp, tire, params_of, theta, [c], [q], mode) for c, q in zip(conditions, quantities)]
         return np.concatenate([v for v, _ in parts]), np.concatenate([j for _, j in parts])
     model = tire.model
