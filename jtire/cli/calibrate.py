@@ -48,8 +48,9 @@ def simulator_for(spec, standin: bool, say):
     return sim
 
 
-def _case_bar():
-    """on_case for the shell simulator: one tqdm bar per evaluation batch (cases of every target)."""
+def _case_bar(unit=None):
+    """on_case for the shell simulator: one tqdm bar per evaluation batch (cases of every target);
+    any (label, done, total) progress with `unit` (e.g. the posterior check's draws)."""
     from tqdm import tqdm
 
     state = {"bar": None}
@@ -59,7 +60,7 @@ def _case_bar():
             if state["bar"] is not None:
                 state["bar"].close()
             state["bar"] = tqdm(total=total, desc=f"simulate {label}", leave=False, mininterval=0,
-                                unit="experiment" if label.startswith("Jacobian") else "case")
+                                unit=unit or ("experiment" if label.startswith("Jacobian") else "case"))
         if done > state["bar"].n:  # (a bar prints when made: an update by 0 printed it twice)
             state["bar"].update(done - state["bar"].n)
         if done >= total:

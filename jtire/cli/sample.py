@@ -32,7 +32,7 @@ def run_cli(args, say) -> int:
 
     from ..calibration.posterior_spec import load_posterior
     from ..calibration.sampling import COVERAGE_OK, run_posterior
-    from .calibrate import simulator_for
+    from .calibrate import _case_bar, simulator_for
 
     spec = load_posterior(args.config, args.set)
     if args.history:
@@ -52,7 +52,8 @@ def run_cli(args, say) -> int:
         t = f"{np.max(tau):.1f}" if np.all(np.isfinite(tau)) else "n/a"
         say(f"  {steps} steps, max tau {t}", err=True)
 
-    r = run_posterior(spec, out, sim, progress, _draw_bar())
+    bar = _case_bar(unit="draw")  # draws reused from a killed check are counted at the start
+    r = run_posterior(spec, out, sim, progress, lambda done, total, reused: bar("posterior draws (check)", done, total))
     _report(r, spec, say)
     for k, ref in enumerate(r["rounds"][1:], start=1):
         say(f"coverage outside {COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%}: refined round {k} of at most "
@@ -68,29 +69,6 @@ def run_cli(args, say) -> int:
             "refined round(s) (check.rounds): the emulator's intervals for those responses are not trustworthy "
             "at the stated level")
     return 0 if final["result"].converged else 1
-
-
-def _draw_bar():
-    """on_check for run_posterior: a tqdm bar over the check's posterior draws (minutes each at the
-    default mesh); draws reused from an earlier, killed check are counted at the start."""
-    from tqdm import tqdm
-
-    state = {"bar": None}
-
-    def on_check(done, total, reused):
-        bar = state["bar"]
-        if bar is None or bar.total != total or bar.n > done:
-            if bar is not None:
-                bar.close()
-            bar = state["bar"] = tqdm(total=total, desc="simulator check", unit="draw", mininterval=0,
-                                      initial=done, postfix=f"{reused} reused" if reused else None)
-        if done > bar.n:  # (a bar prints when made: an update by 0 printed it twice)
-            bar.update(done - bar.n)
-        if done >= total:
-            bar.close()
-            state["bar"] = None
-
-    return on_check
 
 
 def _report(r, spec, say) -> None:
