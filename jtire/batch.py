@@ -47,24 +47,26 @@ def simulate_batch(exp, model, params, cases: Case, *, params_batched: bool = Fa
     return jax.vmap(lambda p, c: exp.simulate(model, p, c), in_axes=(0 if params_batched else None, 0))(params, cases)
 
 
-def _case_by_case(exp, model, params, cases: Case, params_batched: bool):
+def _case_by_case(exp, model, params, cases: Case, params_batched: bool, device: int = 0):
     """The cases of a batch one after another, unbatched (the static solves): under vmap a Newton
     loop's conditional steps (refactorize or not, GMRES restarts) become selects that run both
     branches, so a vmapped solve costs 4x an unbatched one even for one case (measured: E02 on the
     default mesh, 13.3 s vmapped vs 3.2 s). One compiled program serves any batch size."""
     n = jax.tree_util.tree_leaves(cases)[0].shape[0]
-    outs = [jax.device_get(exp.simulate(model, _index(params, i) if params_batched else params, _index(cases, i)))
-            for i in range(n)]
+    with jax.default_device(jax.devices()[device]):
+        outs = [jax.device_get(exp.simulate(model, _index(params, i) if params_batched else params, _index(cases, i)))
+                for i in range(n)]
     return jax.tree_util.tree_map(lambda *a: np.stack(a), *outs)
 
 
-def shard(tree, n_devices: int):
+def shard(tree, n_devices: int, device: int = 0):
     """Place a batch (leading axis) across the first n_devices devices; the compiled phase programs
-    then run each device's share of the cases on that device (XLA partitions the batch)."""
+    then run each device's share of the cases on that device (XLA partitions the batch). One device:
+    the device numbered `device`."""
     if n_devices <= 1:
         # committed to the device like every phase program's output: a compiled program is specific
         # to whether its inputs are committed, so uncommitted cases made the first phase trace apart
-        return jax.device_put(tree, jax.devices()[0])
+        return jax.device_put(tree, jax.devices()[device])
     mesh = Mesh(np.array(jax.devices()[:n_devices]), ("cases",))
     return jax.device_put(tree, NamedSharding(mesh, PartitionSpec("cases")))
 
@@ -107,7 +109,7 @@ class CaseFailure:
 
 
 def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: int = 0, on_result=None,
-        on_batch=None, keep_outputs: bool = False):
+        on_batch=None, keep_outputs: bool = False, device: int = 0):
     """Run `exp` for every condition; returns a list (one per condition) of ExperimentResult or
     CaseFailure, in order.
 
@@ -143,6 +145,7 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     if not exp.shardable:  # static solves run case by case anyway: each case is its own batch, so it is
         size = 1  # reduced and handed to on_result (saved) the moment it finishes
     n_dev = n_devices_for(size, devices) if exp.shardable else 1
+    dev0 = 0 if exp.shardable else int(device)  # a static experiment runs on the device it is given
     size = -(-size // n_dev) * n_dev  # a multiple of the device count
     pending = {}
     results = [None] * len(conditions)
@@ -152,12 +155,12 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
         padded = chunk + [chunk[-1]] * (size - len(chunk))
         cases = _stack([Case.of(flat[k][1]["load_N"] if "load_N" in flat[k][1] else 0.0, flat[k][1]["pressure_Pa"],
                                 dts[k], exp.aux(flat[k][1])) for k in padded])
-        params = shard(_stack([plist[flat[k][0]] for k in padded]), n_dev) if params_batched else plist[0]
+        params = shard(_stack([plist[flat[k][0]] for k in padded]), n_dev, dev0) if params_batched else plist[0]
         t0 = time.perf_counter()
         if exp.shardable:
             outs = jax.device_get(simulate_batch(exp, model, params, shard(cases, n_dev), params_batched=params_batched))
         else:
-            outs = _case_by_case(exp, model, params, shard(cases, 1), params_batched)
+            outs = _case_by_case(exp, model, params, shard(cases, 1, dev0), params_batched, dev0)
         wall = time.perf_counter() - t0
         for j, k in enumerate(chunk):
             i, case = flat[k]

@@ -1,0 +1,33 @@
+"""The shell simulator's evaluation: the static targets run side by side, one device each.
+
+With several devices, `ShellSimulator.evaluate` runs its static experiments (E02, E09: Newton
+solves, case by case) at the same time, each on its own device, before the transients take every
+device. The numbers must not depend on it: the same arithmetic on another device of the same CPU
+gives the same bits, so the tolerance is 1e-12 relative (no physics is involved, only scheduling).
+Slow: three static programs compile on the coarse ring (75 s here).
+"""
+
+import dataclasses
+
+import jax
+import numpy as np
+import pytest
+
+from .conftest import COARSE_SET, REPO
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(len(jax.devices()) < 2, reason="needs two JAX devices (one per core: 2 cores)")
+def test_static_targets_side_by_side_equal_one_after_another():
+    from jtire.calibration.shell import ShellSimulator
+    from jtire.calibration.spec import load_calibration
+
+    spec = load_calibration(REPO / "configs" / "calibration" / "study.toml", COARSE_SET)
+    spec = dataclasses.replace(spec, targets=tuple(t for t in spec.targets if t.name in ("DZ", "DY")))
+    theta = np.asarray(spec.space.from_params(spec.base_params))
+    side = ShellSimulator(spec, spec.tire)
+    assert [g["exp"].shardable for g in side.groups] == [False, False]
+    y_side = side.evaluate(theta[None])
+    y_one = ShellSimulator(spec, spec.tire, devices=1).evaluate(theta[None])
+    assert np.all(np.isfinite(y_side)) and 0.02 < y_side[0, 0] < 0.06 and 0.003 < y_side[0, 1] < 0.02
+    np.testing.assert_allclose(y_side, y_one, rtol=1e-12)
