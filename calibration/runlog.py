@@ -32,7 +32,8 @@ from .history import BudgetExhausted
 from .simulator import check_batch, pieces
 from .targets import percent_errors
 from ..errors import ConfigError
-from ..io import append_jsonl, atomic_write_json, atomic_write_text, read_jsonl, remove_stale_temps
+from ..fingerprint import claim_folder
+from ..io import append_jsonl, atomic_write_json, atomic_write_text, read_jsonl
 
 __all__ = ["RunLog", "check_fingerprint", "BudgetExhausted", "load_records", "records_arrays"]
 
@@ -41,18 +42,9 @@ _REPLAY_TOL = 1e-9
 
 
 def check_fingerprint(out_dir, fingerprint: dict, name: str = "fingerprint.json") -> None:
-    """Store the fingerprint in out_dir, or check it against the stored one (one-line error)."""
-    path = Path(out_dir) / name
-    fingerprint = json.loads(json.dumps(fingerprint))  # the form it has once read back
-    if path.exists():
-        old = json.loads(path.read_text())
-        if old != fingerprint:
-            keys = sorted(k for k in set(old) | set(fingerprint) if old.get(k) != fingerprint.get(k))
-            raise ConfigError(f"--out {out_dir}: holds a run made with other {', '.join(keys)}; "
-                              "use another folder (or delete it to start again)")
-        remove_stale_temps(out_dir)  # a resume: drop the temporary files of a write a kill interrupted
-    else:
-        atomic_write_json(path, fingerprint)
+    """Store the fingerprint in out_dir, or check it against the stored one (one-line error naming
+    the fields that differ): `jtire.fingerprint.claim_folder`, as sweeps and characterizations do."""
+    claim_folder(out_dir, fingerprint, name)
 
 
 def load_records(path) -> list:

@@ -90,12 +90,8 @@ class CalibrationSpec:
 
     def fingerprint(self, simulator=None) -> dict:
         """Everything that determines a calibration's numbers (budget excluded: it may grow)."""
-        from importlib.metadata import PackageNotFoundError, version
+        from ..fingerprint import code_version
 
-        try:
-            ver = version("jtire")
-        except PackageNotFoundError:  # pragma: no cover (a source tree without install)
-            ver = "unknown"
         opts = {"arsm": {k: v for k, v in self.arsm.items() if k != "budget"},
                 "gradient": {k: v for k, v in self.gradient.items()
                              if k not in ("max_iterations", "forward_budget")}}
@@ -104,7 +100,7 @@ class CalibrationSpec:
                 "targets": [t.as_dict() for t in self.targets], "weights": list(self.weights),
                 "space": self.space.as_dict(), "tire": self.tire_raw,
                 "simulator": None if simulator is None else simulator.fingerprint(),
-                "jtire_version": ver}
+                "jtire_version": code_version()}
 
 
 def _is_num(v):

@@ -105,7 +105,7 @@ def test_calibrate_and_sensitivity_on_the_standin(tmp_path, capsys):
         assert row["simulated"] * t.unit_factor == pytest.approx(best[row["target"]], rel=1e-6)
     # a rerun with other settings refuses in one line
     _one_line_error(capsys, ["calibrate", str(CAL / "study.toml"), "--standin", "--out", str(out),
-                             "--set", "arsm.seed=4"], "holds a run made with other options")
+                             "--set", "arsm.seed=4"], "holds results made with other settings (differs in options.seed)")
     # the calibrated tire is a tire every command takes: a calibration config on it parses
     cfg = _config(tmp_path, STUDY_TEXT.replace('tire_file = "../tires/xone_xda.toml"',
                                                f'tire_file = "{out / "calibrated_tire.toml"}"'))

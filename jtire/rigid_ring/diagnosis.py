@@ -6,7 +6,7 @@ that the cause was not established.
 `explain(...)` (same arguments) the Diagnosis records behind them (metric, state, text). Both work from
   * the comparison rows (`validation.compare`: the shell's and the ring's value of every metric),
   * the condition's table row and what `params.derive` makes of it, put through the ring's own
-    linearized equations (numpy here, the same equations as `model.RigidRing`, so no simulation),
+    linearized equations (`modes`: numpy, the same equations as `model.RigidRing`, no simulation),
   * optionally the characterization folder `char_dir` (the shell's case folders: the E02
     load-deflection curve, the E04 drop record's reductions, the E03 spindle F_x record, the E10
     measurement window) and the shell's validation signals (`shell_signals`, as `validate.validate`
@@ -38,116 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .model import VXLOW
-from .params import RigidRingParams, derive
+from .params import derive
 
-# ------------------------------------------------------------------ the ring's linear equations
-
-
-def _modes(M, K, C):
-    """(f_n Hz, zeta, eigenvectors (n, k) of the positions) of M q'' + C q' + K q = 0, oscillatory
-    modes only, sorted by frequency."""
-    n = M.shape[0]
-    Mi = np.linalg.inv(M)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Mi @ K, -Mi @ C]])
-    lam, vec = np.linalg.eig(A)
-    keep = lam.imag > 1e-9
-    lam, vec = lam[keep], vec[:n, keep]
-    order = np.argsort(np.abs(lam))
-    lam, vec = lam[order], vec[:, order]
-    return np.abs(lam) / (2 * math.pi), -lam.real / np.abs(lam), vec
-
-
-def vertical_modes(d):
-    """Drop-test linearization (rim z free, belt on the residual spring): [(f, zeta) bounce,
-    (f, zeta) belt] of rim mass m_a on k_bz || C_bz to the belt m_b on k_vr || C_vr."""
-    t = d.tire
-    M = np.diag([t.m_tot_kg - t.m_b_kg, t.m_b_kg])
-    K = np.array([[d.k_bz, -d.k_bz], [-d.k_bz, d.k_bz + d.k_vr]])
-    C = np.array([[d.C_bz, -d.C_bz], [-d.C_bz, d.C_bz + d.C_vr]])
-    f, z, _ = _modes(M, K, C)
-    return list(zip(f, z))
-
-
-def belt_vertical_mode(d):
-    """(f, zeta) of the belt's vertical mode with the rim locked (drum-cleat): k_bz + k_vr on m_b."""
-    k, c, m = d.k_bz + d.k_vr, d.C_bz + d.C_vr, d.tire.m_b_kg
-    return math.sqrt(k / m) / (2 * math.pi), c / (2 * math.sqrt(k * m))
-
-
-def fore_aft_modes(d, speed, k_bx=None, C_bx=None, C_btheta=None):
-    """Drum-cleat linearization of the fore-aft / wind-up motion (rim x, z locked, rim spin free,
-    rolling at `speed`): belt x_b, theta_b, rim theta_a and the tread's slip state u with
-    a du/dt + V u = -a (x_b' - r_e theta_b'), F_x = k_cx u (+ the low-speed damper below VXLOW).
-    Returns [(f, zeta, x_b share of the mode's kinetic energy)]; k_bx, C_bx, C_btheta override."""
-    t = d.tire
-    kbx = d.k_bx if k_bx is None else k_bx
-    cbx = d.C_bx if C_bx is None else C_bx
-    cbt = d.C_btheta if C_btheta is None else C_btheta
-    kbt, a, re, rb = d.k_btheta, d.a, d.r_e, d.r_b
-    kcx = d.k_k / a
-    damp_vlow = inspect.signature(RigidRingParams.from_derived).parameters["damp_vlow"].default
-    cv = damp_vlow * kcx * max(0.0, 1.0 - abs(speed) / VXLOW)  # the low-speed tread damper, as the model
-    m, Ib, Ia = t.m_b_kg, t.I_by_kgm2, t.I_ay_kgm2
-    # state [x_b, th_b, th_a, x_b', th_b', th_a', u]; u' = -(x_b' - r_e th_b') - V u / a
-    A = np.zeros((7, 7))
-    A[0, 3] = A[1, 4] = A[2, 5] = 1.0
-    du = np.zeros(7)
-    du[3], du[4], du[6] = -1.0, re, -abs(speed) / a
-    A[6] = du
-    fx = kcx * np.eye(7)[6] + cv * du  # F_x as a row over the state
-    A[3] = (-kbx * np.eye(7)[0] - cbx * np.eye(7)[3] + fx) / m
-    msth = -kbt * (np.eye(7)[1] - np.eye(7)[2]) - cbt * (np.eye(7)[4] - np.eye(7)[5])
-    A[4] = (msth - rb * fx) / Ib
-    A[5] = -msth / Ia
-    lam, vec = np.linalg.eig(A)
-    out = []
-    for i in np.flatnonzero(lam.imag > 1e-9):
-        v = vec[:, i]
-        ke = np.array([m * abs(v[3]) ** 2, Ib * abs(v[4]) ** 2, Ia * abs(v[5]) ** 2])
-        out.append((abs(lam[i]) / (2 * math.pi), -lam[i].real / abs(lam[i]), float(ke[0] / ke.sum())))
-    return sorted(out)
-
-
-def lateral_modes(d, variant):
-    """Lateral release linearization (standing, rim y free, camber held, patch stuck).
-    "reduced": m_tot on k_l || C_l. "ring": rim m_a on the sidewall (k_by, C_by) to the belt m_b,
-    I_bx (camber k_bgamma, C_bgamma) standing on the tread k_cy || C_cy at the lever arm r_b.
-    Returns [(f, zeta)]."""
-    t = d.tire
-    if variant == "reduced":
-        return [(math.sqrt(d.k_l / t.m_tot_kg) / (2 * math.pi), d.C_l / (2 * math.sqrt(d.k_l * t.m_tot_kg)))]
-    r = d.r_b
-    M = np.diag([t.m_tot_kg - t.m_b_kg, t.m_b_kg, t.I_bx_kgm2])
-
-    def mat(kb, kc, kg):
-        return np.array([[kb, -kb, 0.0], [-kb, kb + kc, kc * r], [0.0, kc * r, kg + kc * r * r]])
-
-    f, z, _ = _modes(M, mat(d.k_by, d.k_cy, d.k_bgamma), mat(d.C_by, d.C_cy, d.C_bgamma))
-    return list(zip(f, z))
-
-
-def string_step_s63(sigma_total, a, n=2400):
-    """Distance to 63 % of the steady side force after a slip-angle step for a stretched string
-    with a contact patch of half length a (no sliding, no inertia; Pacejka's string model): the
-    leading contact point obeys dv1/ds + v1 / sigma_s = alpha with sigma_s = sigma_total - a, the
-    contact points keep their ground positions, the free string on either side adds sigma_s times
-    its end deflection. Steady: F = 2 c (sigma_s + a)^2 alpha, standing stiffness 2 c (sigma_s + a):
-    their ratio is sigma_total (= k_f / k_l). None when sigma_total <= a."""
-    ss_ = sigma_total - a
-    if not (ss_ > 0 and a > 0):
-        return None
-    s = np.linspace(0.0, 8.0 * sigma_total, n)[:, None]
-    x = np.linspace(-a, a, 401)[None, :]
-    laid = s - (a - x)  # where the contact point at x was laid down (the step at s = 0)
-    v1 = np.where(laid > 0, ss_ * (1 - np.exp(-np.clip(laid, 0, None) / ss_)), 0.0)
-    v = v1 + (s - np.maximum(laid, 0.0))
-    lead = ss_ * (1 - np.exp(-s[:, 0] / ss_))
-    F = np.trapezoid(v, x[0], axis=1) + ss_ * (lead + v[:, 0])
-    frac = F / (2 * sigma_total**2)
-    i = int(np.argmax(frac >= 0.632))
-    return float(np.interp(0.632, frac[i - 1:i + 1], s[i - 1:i + 1, 0]))
-
+from .modes import belt_vertical_mode, fore_aft_modes, lateral_modes, string_step_s63, vertical_modes  # noqa: F401
 
 # ------------------------------------------------------------------ the shell's case folders
 
