@@ -187,7 +187,7 @@ def test_run_calibration_outputs_and_fingerprint(tmp_path, study):
                               tmp_path, budget=30)
     assert res2.n_evaluations == 30 and load_records(tmp_path / HISTORY)[:26] == res.records
     other = dataclasses.replace(study, arsm={**study.arsm, "seed": 5})
-    with pytest.raises(ConfigError, match="other options"):
+    with pytest.raises(ConfigError, match=r"other settings \(differs in options\.seed\)"):
         run_calibration(other, sim, tmp_path)
 
 
