@@ -39,7 +39,7 @@ def test_static_targets_side_by_side_equal_one_after_another():
 def test_static_cases_side_by_side_equal_one_device(coarse_tire, protocol, spec):
     """`batch.run` of a static experiment over three conditions: its cases run side by side on the
     devices (device=None) and give the results of the same cases on one device, in the same order.
-    Slow: the static program compiles for both devices (~40 s here)."""
+    Slow: the static program compiles for both devices (65 s here beside another run)."""
     from jtire import batch
 
     from .conftest import LOAD_RATED, P_RATED, make_experiment
