@@ -16,12 +16,16 @@ values and Jacobian together at a stated cost (the batched shell runner), not a 
 optimistix would need it wrapped in pure_callback with a custom jvp, hide how many runs each
 step costs, and it has no bounds. Forty lines of LM keep every call visible and counted.
 
-Cost: every iteration calls jacobian once at the trial point (values and J together), rejected
-trials included; each call is recorded with its forward-run equivalents
-(`Simulator.cost_forward_equivalents["jacobian"]`; the shell model measures it: the call's wall
-time over a timed forward evaluation of the same targets, its first call charged the two reference
-evaluations and its compiling) and wall time, in the same history format as ARSM, so a killed run
-resumes by replay.
+Cost: a trial point is first evaluated alone (one forward run); the Jacobian, which costs 10-25
+forward runs on the shell model, is computed only where a trial is accepted. A rejected trial so
+costs one run, and a budget that cannot pay for the next Jacobian still takes the step it has
+paid for (measured, track.toml at the default mesh, budget 45: with a Jacobian at every trial the
+first Jacobian's 24.6 runs, its compiling included, left too little for a second and the run
+stopped at the base tire without trying a step). Each call is recorded with its forward-run
+equivalents (`Simulator.cost_forward_equivalents`; the shell model measures a Jacobian's: the
+call's wall time over a timed forward evaluation of the same targets, its first call charged the
+two reference evaluations and its compiling) and wall time, in the same history format as ARSM,
+so a killed run resumes by replay.
 """
 
 import numpy as np
@@ -49,7 +53,7 @@ def calibrate_lm(sim, targets, log: RunLog, weights=None, max_iterations: int = 
 
     Stops: "target" (total error <= tol_percent), "step" (the step fell below min_step in unit
     coordinates), "iterations", "budget" (the log's forward budget), "failed" (the simulator
-    returned non-finite values at the start).
+    returned non-finite values or Jacobian at the start or at an accepted point).
     """
     space = sim.space
     w = np.ones(len(targets)) if weights is None else np.asarray(weights, float)
@@ -62,8 +66,9 @@ def calibrate_lm(sim, targets, log: RunLog, weights=None, max_iterations: int = 
         if not (np.all(np.isfinite(vals)) and np.all(vals > 0) and np.all(np.isfinite(jac))):
             return result_from_log(log, "failed")
         r, ju = _residuals(vals, jac, targets, w, width)
+        meas = np.array([t.measured for t in targets])
         for _ in range(int(max_iterations)):
-            err = np.sum(w * 100.0 * np.abs(vals / np.array([t.measured for t in targets]) - 1.0))
+            err = np.sum(w * 100.0 * np.abs(vals / meas - 1.0))
             if err <= tol_percent:
                 reason = "target"
                 break
@@ -76,12 +81,18 @@ def calibrate_lm(sim, targets, log: RunLog, weights=None, max_iterations: int = 
             if np.max(np.abs(u_new - u)) < min_step:
                 reason = "step"
                 break
-            v_new, j_new = log.jacobian(space.from_unit(u_new), phase="lm",
-                                        extra={"lambda": lam})
-            ok = np.all(np.isfinite(v_new)) and np.all(v_new > 0) and np.all(np.isfinite(j_new))
-            r_new, ju_new = _residuals(v_new, j_new, targets, w, width) if ok else (None, None)
+            theta_new = space.from_unit(u_new)
+            v_new = log.evaluate(theta_new[None], phase="lm_trial", extras=[{"lambda": lam}])[0]
+            ok = np.all(np.isfinite(v_new)) and np.all(v_new > 0)
+            r_new = np.sqrt(w) * np.log(v_new / meas) if ok else None
             if ok and r_new @ r_new < r @ r:
-                u, vals, r, ju = u_new, v_new, r_new, ju_new
+                # accepted: the Jacobian there (its values are the trial's, recomputed with it)
+                v_j, j_new = log.jacobian(theta_new, phase="lm", extra={"lambda": lam})
+                if not (np.all(np.isfinite(v_j)) and np.all(v_j > 0) and np.all(np.isfinite(j_new))):
+                    reason = "failed"
+                    break
+                u, vals = u_new, v_j
+                r, ju = _residuals(vals, j_new, targets, w, width)
                 lam = max(lam * _LAMBDA_DOWN, 1e-12)
             else:
                 lam *= _LAMBDA_UP

@@ -160,12 +160,15 @@ class RunLog:
 
         phase: a label for every record (str) or one per point (list of n str).
         extras: optional list of n dicts of JSON-able fields for the records. Raises
-        BudgetExhausted when the budget cannot take the whole batch (callers trim first).
+        BudgetExhausted when the budget (points, or forward-run equivalents) cannot take the whole
+        batch (callers trim first).
         """
         thetas = np.atleast_2d(np.asarray(thetas, float))
         n = thetas.shape[0]
         if n > self.remaining:
             raise BudgetExhausted(f"{self.method}: budget of {self.budget} evaluations used")
+        if self.cost_forward + n * self.sim.cost_forward_equivalents.get("evaluate", 1.0) > self.forward_budget:
+            raise BudgetExhausted(f"{self.method}: forward budget {self.forward_budget:g} used")
         extras = extras or [{}] * n
         phases = [phase] * n if isinstance(phase, str) else list(phase)
         start = len(self.records)

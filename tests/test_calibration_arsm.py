@@ -62,7 +62,24 @@ def test_lm_recovers_known_parameters(synthetic):
     res = calibrate_lm(sim, tg, log, tol_percent=1e-6, max_iterations=50)
     assert res.stop_reason == "target" and res.n_jacobians <= 50
     np.testing.assert_allclose(sp.to_unit(res.theta), U_TRUE, atol=1e-5)
-    assert res.cost_forward == pytest.approx(res.n_jacobians * sim.cost_forward_equivalents["jacobian"])
+    # every trial is one forward run; the Jacobian is paid only at the start and at accepted trials
+    trials = [r for r in res.records if r["phase"] == "lm_trial"]
+    accepted = [r for r in res.records if r["phase"] == "lm"]
+    assert len(trials) == res.n_evaluations and len(accepted) == res.n_jacobians - 1
+    assert res.cost_forward == pytest.approx(res.n_jacobians * sim.cost_forward_equivalents["jacobian"]
+                                             + res.n_evaluations * sim.cost_forward_equivalents["evaluate"])
+
+
+def test_lm_takes_the_step_it_can_pay_for(synthetic):
+    """A budget that pays for the first Jacobian and a trial but not a second Jacobian ends at the
+    accepted trial, not at the start."""
+    sp, tg, sim = synthetic
+    cj, ce = sim.cost_forward_equivalents["jacobian"], sim.cost_forward_equivalents["evaluate"]
+    log = RunLog(sim, tg, None, "lm", 0, 10**9, forward_budget=cj + ce + 0.5 * cj)
+    res = calibrate_lm(sim, tg, log, tol_percent=1e-6, max_iterations=50)
+    assert res.stop_reason == "budget" and res.n_jacobians == 1 and res.n_evaluations >= 1
+    assert res.total_error_pct < res.records[0]["total_error_pct"]
+    assert res.cost_forward <= cj + ce + 0.5 * cj
 
 
 def test_study_problem_20_parameters(study):
