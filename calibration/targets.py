@@ -58,9 +58,25 @@ class Target:
     why: str = ""
 
     def as_dict(self) -> dict:
+        """For files people read (the fingerprint): the condition in SI with SI names, the table
+        under the config's own field names, so in the config's units (max_load_kN: 60.0, not the
+        60000.0 N held inside)."""
         return {"name": self.name, "experiment": self.experiment, "quantity": self.quantity,
-                "condition": self.condition, "table": self.table, "measured": self.measured,
-                "unit": self.unit, "source": self.source}
+                "condition": self.condition, "table": _in_file_units(self.experiment, self.table),
+                "measured": self.measured, "unit": self.unit, "source": self.source}
+
+
+def _in_file_units(experiment: str, table: dict) -> dict:
+    from ..experiments import REGISTRY
+
+    schema = REGISTRY[experiment].schema
+    out = {}
+    for k, v in table.items():
+        f = schema.get(k)
+        if f is not None and f.factor != 1.0 and not isinstance(v, (bool, str)):
+            v = [x / f.factor for x in v] if isinstance(v, (tuple, list)) else v / f.factor
+        out[k] = v
+    return out
 
 
 def _quantity_suffix(q: str) -> str:

@@ -95,6 +95,9 @@ def test_shipped_configs_parse_with_reasons():
     meas = [t.measured for t in spec.targets]
     np.testing.assert_allclose(meas, [39.0625e-3, 11.0997e-3, 1529.39, 1701.11], rtol=1e-12)
     assert spec.targets[0].table["stated_load_kN"] == pytest.approx(50e3)  # SI inside
+    shown = spec.fingerprint()["targets"][0]["table"]  # the config's units where people read it
+    assert shown["stated_load_kN"] == pytest.approx(50.0) and shown["max_load_kN"] == pytest.approx(60.0)
+    assert shown["fit_range_kN"] == pytest.approx([10.0, 60.0])
     assert spec.targets[2].condition["load_N"] == pytest.approx(38.7e3)
 
 
