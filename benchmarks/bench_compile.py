@@ -28,16 +28,17 @@ unless the environment turns it on. Run it alone on the machine:
 """
 
 import argparse
-import dataclasses
 import os
 import re
+import sys
 import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-REPO = Path(__file__).resolve().parents[1]
-E02_LEVELS = (5e3, 10e3, 15e3, 20e3, 25e3, 30e3, 35e3, 40e3, 45e3, 45.37e3, 50e3, 55e3, 60e3)
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_equilibrium import E02_LEVELS, default_tire  # noqa: E402  (the same tire and load levels)
 
 
 def split(fn, *args, repeat=5):
@@ -78,20 +79,14 @@ def main(argv=None):
 
     import jtire.equilibrium as EQ
     from jtire import units as U
-    from jtire.config import load_tire
     from jtire.equilibrium import linalg as LA
     from jtire.equilibrium import newton as NW
     from jtire.equilibrium import residual as R
     from jtire.equilibrium import sequences as SQ
     from jtire.equilibrium.krylov import gmres
     from jtire.physics.contact import FlatRoad
-    from jtire.tire import make_tire
 
-    nt, ns, nc = (int(v) for v in args.mesh.split("x"))
-    spec = dataclasses.replace(load_tire(REPO / "configs" / "tires" / "xone_xda.toml"), n_theta=nt, n_side=ns,
-                               n_crown=nc)
-    tire = make_tire(spec)
-    m, params = tire.model, tire.params
+    m, params = default_tire(args.mesh)
     p = 120 * U.PSI
     levels = SQ.vertical_levels(p, jnp.asarray(E02_LEVELS))
     path = EQ.static_path(m, params, p, levels)  # the states the pieces are compiled at (not timed)

@@ -29,6 +29,18 @@ E02_LEVELS = tuple(float(v) for v in [5e3, 10e3, 15e3, 20e3, 25e3, 30e3, 35e3, 4
 E09_LATERAL = (2.5e3, 5e3)
 
 
+def default_tire(mesh: str):
+    """(model, params) of the default tire on the mesh "n_theta x n_side x n_crown"."""
+    from jtire.config import load_tire
+    from jtire.tire import make_tire
+
+    nt, ns, nc = (int(v) for v in mesh.split("x"))
+    spec = dataclasses.replace(load_tire(REPO / "configs" / "tires" / "xone_xda.toml"), n_theta=nt, n_side=ns,
+                               n_crown=nc)
+    tire = make_tire(spec)
+    return tire.model, tire.params
+
+
 def timed(fn, repeat):
     import jax
 
@@ -59,15 +71,9 @@ def main(argv=None):
 
     import jtire.equilibrium as EQ
     from jtire import units as U
-    from jtire.config import load_tire
     from jtire.experiments.patch import extent, flat_gap
-    from jtire.tire import make_tire
 
-    nt, ns, nc = (int(v) for v in args.mesh.split("x"))
-    spec = dataclasses.replace(load_tire(REPO / "configs" / "tires" / "xone_xda.toml"), n_theta=nt, n_side=ns,
-                               n_crown=nc)
-    tire = make_tire(spec)
-    m, params = tire.model, tire.params
+    m, params = default_tire(args.mesh)
     p = 120 * U.PSI
     load = 45.37e3
 
