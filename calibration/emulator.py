@@ -105,8 +105,9 @@ class Emulator:
 
     names: (m,) responses; kinds: (m,) the chosen model per response; loo: {response: {kind:
     LOO RMSE of ln(response)}} for every candidate tried; n_points: training points;
-    var_scale: (m,) factors on the predictive variance (1 unless calibrated on held-out simulator
-    runs: `calibration.sampling.calibrate_variance`).
+    var_scale a, var_floor b: (m,) the predictive variance v becomes max(a v, v + b) where b > 0, and
+    a v where b = 0 (a = 1, b = 0 unless calibrated on held-out simulator runs:
+    `calibration.sampling.calibrate_variance`).
     """
 
     space: object
@@ -116,14 +117,19 @@ class Emulator:
     loo: dict
     n_points: int
     var_scale: np.ndarray = None
+    var_floor: np.ndarray = None
 
     def predict(self, thetas):
         """thetas (n, d) -> (mean of ln response (n, m), predictive variance (n, m))."""
         u = self.space.to_unit(np.atleast_2d(np.asarray(thetas, float)))
         out = [m.predict(u) for m in self.models]
         var = np.stack([o[1] for o in out], axis=-1)
-        if self.var_scale is not None:
-            var = var * np.asarray(self.var_scale, float)
+        a = 1.0 if self.var_scale is None else np.asarray(self.var_scale, float)
+        if self.var_floor is not None:
+            b = np.asarray(self.var_floor, float)
+            var = np.where(b > 0, np.maximum(a * var, var + b), a * var)
+        else:
+            var = a * var
         return np.stack([o[0] for o in out], axis=-1), var
 
     def summary(self) -> dict:
@@ -131,7 +137,26 @@ class Emulator:
                "loo_rmse_ln": self.loo, "gp_available": gp_available()}
         if self.var_scale is not None:
             out["variance_scale"] = dict(zip(self.names, np.asarray(self.var_scale, float).tolist()))
+        if self.var_floor is not None:
+            out["variance_floor_sd_ln"] = dict(zip(self.names, np.sqrt(self.var_floor).tolist()))
         return out
+
+    def calibration_text(self) -> str:
+        """How held-out runs changed each response's predictive variance, in one line."""
+        if self.var_scale is None and self.var_floor is None:
+            return "not calibrated"
+        n = len(self.names)
+        a = np.ones(n) if self.var_scale is None else np.asarray(self.var_scale, float)
+        b = np.zeros(n) if self.var_floor is None else np.asarray(self.var_floor, float)
+        parts = []
+        for name, ai, bi in zip(self.names, a, b):
+            if bi == 0.0:
+                parts.append(f"{name} x {ai:.3g}")
+            elif ai == 1.0:
+                parts.append(f"{name} + ({np.sqrt(bi):.3g})^2")
+            else:
+                parts.append(f"{name} the wider of x {ai:.3g} and + ({np.sqrt(bi):.3g})^2")
+        return ", ".join(parts)
 
 
 def fit_emulator(space, names, thetas, responses, candidates=CANDIDATES, seed: int = 0) -> Emulator:

@@ -10,7 +10,9 @@
     [emulator]   candidates = ["linear", "reduced", "full", "gp"], seed
     [sampler]    walkers, max_steps, check_every, n_tau, seed, init_spread,
                  moves = "de" | "stretch", coordinates = "logit" | "log"
-    [check]      draws, seed, refine = true | false, folds, rounds (refined rounds at most)
+    [check]      draws, seed, refine = true | false, folds, rounds (refined rounds at most),
+                 variance = "wider" | "floor" | "scale" (how the held-out runs correct the predictive variance:
+                 calibration.sampling.calibrate_variance)
 """
 
 import dataclasses
@@ -29,6 +31,7 @@ __all__ = ["PosteriorSpec", "load_posterior", "PRIORS", "SAMPLER_SCHEMA"]
 PRIORS = ("log_uniform", "log_normal")
 DISCREPANCY = ("best_miss", "none")
 COORDINATES = ("logit", "log")
+VARIANCE_FORMS = ("wider", "floor", "scale")
 UNCERTAINTY_FROM = ("track_scatter", "track_trend")
 TOP_KEYS = {"calibration", "history", "description", "prior", "uncertainty", "discrepancy",
             "emulator", "sampler", "check"}
@@ -50,7 +53,7 @@ class PosteriorSpec:
     sigma_ln: sd of ln p of the log-normal prior; sigma_rel: (m,) measurement sd relative to each
     target; sigma_sources: (m,) where each comes from; discrepancy: "best_miss" or "none";
     candidates; emulator_seed; sampler, check: option dicts (sampler["moves"],
-    sampler["coordinates"], check["refine"] included); raw: the config after overrides."""
+    sampler["coordinates"], check["refine"] and check["variance"] included); raw: the config after overrides."""
 
     path: Path
     calibration: object
@@ -181,7 +184,8 @@ def load_posterior(path, overrides=()) -> PosteriorSpec:
     if sampler["check_every"] > sampler["max_steps"]:
         raise ConfigError(f"sampler.check_every = {sampler['check_every']}: must be <= "
                           f"sampler.max_steps = {sampler['max_steps']}")
-    craw, refine = _pop_choices(raw.get("check", {}), "check", {"refine": ((True, False), True)})
+    craw, refine = _pop_choices(raw.get("check", {}), "check", {"refine": ((True, False), True),
+                                                               "variance": (VARIANCE_FORMS, "wider")})
     check = {**validate_table(craw, CHECK_SCHEMA, "check"), **refine}
     if check["refine"] and check["folds"] > check["draws"]:
         raise ConfigError(f"check.folds = {check['folds']}: must be <= check.draws = {check['draws']}")

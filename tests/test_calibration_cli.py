@@ -135,6 +135,7 @@ BAD_POSTERIORS = [
     (('coordinates = "logit"', 'coordinates = "probit"'), ["sampler.coordinates", "logit"]),
     (("refine = true", "refine = 1"), ["check.refine", "true or false"]),
     (("folds = 4", "folds = 40"), ["check.folds", "check.draws"]),
+    (('variance = "wider"', 'variance = "add"'), ["check.variance", "wider", "floor", "scale"]),
 ]
 
 

@@ -58,16 +58,23 @@ def run_cli(args, say) -> int:
     for k, ref in enumerate(r["rounds"][1:], start=1):
         say(f"coverage outside {COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%}: refined round {k} of at most "
             f"{spec.check['rounds']} (every check run so far, {ref['n_check_runs']}, joins the training set; "
-            "predictive variance x "
-            + ", ".join(f"{n} {v:.3g}" for n, v in zip(r["emulator"].names, ref["emulator"].var_scale))
+            f"predictive variance in ln ({spec.check['variance']}): " + ref["emulator"].calibration_text()
             + f" by {spec.check['folds']}-fold cross-validation over them; fresh draws check it):")
         _report(ref, spec, say)
     final = r["rounds"][-1]
-    if "check" in final and len(r["rounds"]) > 1 and any(
-            not (COVERAGE_OK[0] <= v <= COVERAGE_OK[1]) for v in final["check"]["coverage"].values()):
-        say(f"coverage still outside {COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%} after {len(r['rounds']) - 1} "
-            "refined round(s) (check.rounds): the emulator's intervals for those responses are not trustworthy "
-            "at the stated level")
+    if "check" in final and len(r["rounds"]) > 1:
+        cov = final["check"]["coverage"]
+        low = [n for n, v in cov.items() if v < COVERAGE_OK[0]]
+        high = [n for n, v in cov.items() if v > COVERAGE_OK[1]]
+        if low or high:
+            say(f"coverage still outside {COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%} after {len(r['rounds']) - 1} "
+                "refined round(s) (check.rounds):")
+        if low:
+            say(f"  {', '.join(low)}: below {COVERAGE_OK[0]:.0%}: the intervals are too narrow, not "
+                "trustworthy at the stated level")
+        if high:
+            say(f"  {', '.join(high)}: above {COVERAGE_OK[1]:.0%}: the intervals are wider than the stated "
+                "level needs (conservative)")
     return 0 if final["result"].converged else 1
 
 
