@@ -29,7 +29,9 @@ from jtire.resources import config_path
 
 # Previous figures (2-core machine, the default-mesh study calibration's 45 runs, GP emulator,
 # 64 walkers, max_steps 20000): `jtire sample` at commit 6d11341 (stretch move in ln p).
-PREVIOUS = {"stretch:log": "acceptance 0.079, max tau 2184, 20000 steps, NOT converged, chain ~7 min"}
+# de:logit: `jtire sample` at commit eb8c960, quiet machine (its first round).
+PREVIOUS = {"stretch:log": "acceptance 0.079, max tau 2184, 20000 steps, NOT converged, chain ~7 min",
+            "de:logit": "acceptance 0.221, max tau 118, 6500 steps, converged, emulator 1.7 s, chain 23.5 s"}
 
 
 def main(argv=None):
