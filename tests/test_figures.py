@@ -3,7 +3,7 @@
 One session fixture runs each experiment the figures need once, small (`_data.run_cases` with
 --quick's settings: the 32 x 4 ring, short durations, two conditions), into a characterization
 folder; every figure test then draws from it with --from (no simulation), checks the PNG and the
-number of curves the script reports. One test runs a script end to end without --from. The E01
+number of curves the script reports. One test (slow) runs a script end to end without --from. The E01
 runs also give the check that the contact pressure of a simulated footprint integrates to the load.
 """
 
@@ -130,6 +130,9 @@ def test_footprint_pressure_integrates_to_the_load(char_dir):
         assert abs(span - c.quantities["contact_length_m"]) < 2 * np.max(t["point_dx_m"])
 
 
+# ~45 s here (its quick protocol compiles programs of its own): a slow check; the fast suite draws
+# Figure 5-2 from a real characterization instead (below), the README's way of making the figures
+@pytest.mark.slow
 def test_one_script_end_to_end(tmp_path, capsys):
     """fig6_2 simulates its own runs (E07 at two pressures, quick) through the public API."""
     out = tmp_path / "fig6_2.png"

@@ -17,9 +17,10 @@ then rerun to the end. Checks:
 - histories have no duplicate record: every call/evaluation index appears once, in order; and the
   resumed run computed only what the killed runs had not finished.
 
-Quick versions (one kill each) run in the suite, but characterize's (~95 s) is marked slow; the soaks
-(10 kills in a row into one folder, each resumed run killed again, then one run to the end) are
-marked slow.
+Quick versions (one kill each) of compete and calibrate run in the fast suite; sample's (~60 s) and
+characterize's (~95 s) are slow checks (the chain's exact resume is also tested in-process by
+tests/test_posterior.py, the check's by tests/test_calibration_cli.py); the soaks (10 kills in a row
+into one folder, each resumed run killed again, then one run to the end) are slow too.
 """
 
 import json
@@ -265,9 +266,10 @@ def _kills(kind, references, calibration_history, tmp_path, n_kills, seed):
 
 
 # (the quick kill of `jtire sweep` is tests/test_sweep.py's; its soak is here)
-# characterize's quick kill (~95 s: a reference run and a killed one on the shell model) is slow too,
-# to keep the fast suite under 15 minutes; its soak below covers it with ten kills
-@pytest.mark.parametrize("kind,seed", [("compete", 11), ("calibrate", 12), ("sample", 13),
+# sample's quick kill (~60 s) and characterize's (~95 s: a reference run and a killed one on the shell
+# model) are slow, to keep the fast suite under 15 minutes; the soaks below cover them with ten kills
+@pytest.mark.parametrize("kind,seed", [("compete", 11), ("calibrate", 12),
+                                       pytest.param("sample", 13, marks=pytest.mark.slow),
                                        pytest.param("characterize", 14, marks=pytest.mark.slow)])
 def test_one_kill_then_resume_gives_the_uninterrupted_files(kind, seed, references, calibration_history, tmp_path):
     killed = _kills(kind, references, calibration_history, tmp_path, 1, seed)
