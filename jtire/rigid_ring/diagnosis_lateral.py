@@ -1,0 +1,153 @@
+"""Diagnosis checks of the out-of-plane metrics (`diagnosis`): the lateral release (frequency and
+damping) and the slip step (steady F_y and M_z, relaxation length s63), against E10's measurement
+window. Each check takes the condition's context and the comparison row and returns (state, text)."""
+
+import math
+
+import numpy as np
+
+from .diagnosis_base import FULL, NONE, PARTIAL, _damping, _n, _p, _verdict, _within
+from .modes import lateral_modes, string_step_s63
+
+
+def _lateral_zeta(cx, c):
+    return _damping(cx, c, "C_l_Ns_per_m", "C_l_2p_Ns_per_m", "C_l_fit_Ns_per_m", "lateral.f_Hz",
+                    "lateral_stiffness")
+
+
+
+def _lateral_f(cx, c):
+    d = cx.d
+    f_red = lateral_modes(d, "reduced")[0][0]
+    m_tot = d.tire.m_tot_kg
+    k_dyn = m_tot * (2 * math.pi * c.shell) ** 2
+    txt = (f"the validation's reduced lateral model puts m_tot = {m_tot:.4g} kg on k_l = {_n(d.k_l, 'N/m')} "
+           f"({_n(f_red, 'Hz')}); for the shell's frequency that mass needs m_tot (2 pi f)^2 = {_n(k_dyn, 'N/m')} = "
+           f"{k_dyn / d.k_l:.3g} x k_l")
+    if None in (d.k_by, d.k_cy, d.k_bgamma, d.C_by, d.C_cy, d.C_bgamma):
+        return NONE, txt + "; the ring variant's inputs (k_by, k_bgamma, k_cy) are missing"
+    f_ring = lateral_modes(d, "ring")[0][0]
+    txt += (f"; in the ring variant (belt y_b, gamma_b on k_by, k_bgamma and the tread k_cy; the same static k_l) the "
+            f"belt's {d.tire.m_b_kg:.4g} kg moves less than the rim and the mode is at {_n(f_ring, 'Hz')} "
+            f"({_p(f_ring / c.shell - 1)})")
+    state = _verdict(f_ring, c.shell, c.ring, c.tolerance)
+    if state == PARTIAL:
+        txt += (f"; the remaining stiffness ratio (f_shell/f_variant)^2 = {(c.shell / f_ring) ** 2:.3g} is not "
+                f"established (rate stiffening of the sidewall rubber is a candidate)")
+    return state, txt
+
+
+def _speeds(cx):
+    return sorted({float(m.split(".")[0][5:]) for m in cx.rows if m.startswith("step_")})
+
+
+def _step_alpha(cx):
+    """Slip angle of the step (rad) from the ring's steady F_y = -k_f sin(alpha)."""
+    for v in _speeds(cx):
+        fy = cx.val(f"step_{v:g}.F_y_steady_N", "ring")
+        if fy is not None and cx.d.k_f:
+            return math.asin(min(1.0, abs(fy) / cx.d.k_f))
+    return None
+
+
+def _e10(cx, key, alpha):
+    """|F_y| or |M_z| of the row's E10 curve at the slip angle alpha (rad), or None."""
+    cv = cx.row.curves
+    if cv is None:
+        return None
+    y = cv.wheel_lateral_force()[0] if key == "F_y" else cv.M_z_SAE_Nm
+    if y is None:
+        return None
+    return float(abs(np.interp(math.degrees(alpha), cv.slip_angle_deg, y)))
+
+
+def _e10_settling(cx, alpha):
+    """(drift_rel over the E10 window at alpha, window (m), speed, estimated shortfall) or None. A
+    first-order approach over sigma drifts by (shortfall) x window / sigma over the window."""
+    res, sig = cx.case("cornering")
+    if sig is None or "F_y_drift_rel" not in sig:
+        return None
+    i = int(np.argmin(abs(sig["slip_angle_deg"] - math.degrees(alpha))))
+    drift = float(sig["F_y_drift_rel"][i])
+    v = res.get("quantities", {}).get("speed_m_per_s")
+    w = res.get("info", {}).get("measure_s")
+    if not (np.isfinite(drift) and v and w and cx.d.sigma):
+        return None
+    return drift, v * w, v, drift * cx.d.sigma / (v * w)
+
+
+def _step_force(cx, c, key):
+    d = cx.d
+    alpha = _step_alpha(cx)
+    v_here = float(c.metric.split(".")[0][5:])
+    unit, sym = ("N", "k_f") if key == "F_y" else ("N m", "k_m")
+    lin = (d.k_f if key == "F_y" else d.k_m) * math.sin(alpha) if alpha else None
+    curve = _e10(cx, key, alpha) if alpha else None
+    parts, state = [], NONE
+    res, _ = cx.case("cornering")
+    v10 = (res or {}).get("quantities", {}).get("speed_m_per_s")
+    at = f" (E10, at {v10:.3g} m/s)" if v10 else ""
+    shell = abs(c.shell)
+    if curve:
+        parts.append(f"the ring's {key} {_n(abs(c.ring), unit)} is the linear {sym} sin(alpha) at "
+                     f"{math.degrees(alpha):.3g} deg; the cornering curve{at} has {_n(curve, unit)} there "
+                     f"({_p(lin / curve - 1)} linear vs curve), the shell's step {_n(shell, unit)} "
+                     f"({_p(shell / curve - 1)} vs curve)")
+        if not _within(lin, curve, c.tolerance) and _within(shell, curve, c.tolerance):
+            state = FULL
+            parts.append(f"{sym}, a slope fitted over the first degrees of a curved {key}(alpha), misses the curve's own "
+                         f"value at the step angle")
+    for vo in [v for v in _speeds(cx) if v != v_here]:
+        so = cx.val(f"step_{vo:g}.{c.metric.split('.', 1)[1]}", "shell")
+        if so:
+            dv = shell / abs(so) - 1
+            parts.append(f"the shell's value changes {_p(dv)} from {vo:g} to {v_here:g} m/s (a speed dependence the "
+                         f"ring does not have)")
+            if state == NONE and curve and _within(lin, curve, c.tolerance) and abs(dv) > 0.5 * abs(c.rel_diff):
+                state = FULL
+    st = _e10_settling(cx, alpha) if alpha else None
+    if st is not None:
+        drift, win, v, short = st
+        parts.append(f"E10's force still grew over its {_n(win, 'm')} window at {v:.3g} m/s (drift {_p(drift)}: "
+                     f"~{_p(short)} short of steady for a lag over sigma = {_n(d.sigma, 'm')})")
+        if (state == NONE and curve and abs(short) > 0.5 * abs(c.rel_diff)
+                and _within(shell, curve * (1 + short), c.tolerance)):
+            state = FULL
+    return state, "; ".join(parts) if parts else "no E10 curve and no second speed to compare"
+
+
+def _step_s63(cx, c):
+    d = cx.d
+    v_here = float(c.metric.split(".")[0][5:])
+    parts, state = [f"the ring is a first-order lag over sigma = k_f/k_l = {_n(d.sigma, 'm')} at any speed "
+                    f"(s63 = {_n(c.ring, 'm')})"], NONE
+    s_str = string_step_s63(d.sigma, d.a) if d.sigma and d.a else None
+    if s_str:
+        parts.append(f"a contact patch of half length a = {_n(d.a, 'm')} builds part of the force inside its own "
+                     f"length: a stretched string with the same k_f/k_l (sigma_string = sigma - a = "
+                     f"{_n(d.sigma - d.a, 'm')}) reaches 63 % at {_n(s_str, 'm')} ({s_str / d.sigma:.2g} sigma; "
+                     f"{_p(s_str / c.shell - 1)} against the shell)")
+        state = _verdict(s_str, c.shell, c.ring, c.tolerance)
+    for vo in [v for v in _speeds(cx) if v != v_here]:
+        so = cx.val(f"step_{vo:g}.s63_m", "shell")
+        if so:
+            parts.append(f"the shell's s63 changes {_p(c.shell / so - 1)} from {vo:g} to {v_here:g} m/s, which neither a "
+                         f"lag nor the quasi-static string can")
+    f_lat = cx.val("lateral.f_Hz", "shell")
+    if f_lat and d.sigma:
+        parts.append(f"at {v_here:g} m/s sigma is rolled in {1e3 * d.sigma / v_here:.3g} ms, {d.sigma / v_here * f_lat:.2g} "
+                     f"of the shell's lateral period 1/{_n(f_lat, 'Hz')} (the shorter, the less a quasi-static model holds)")
+    sig = (cx.shell_signals or {}).get(f"step_{v_here:g}")
+    if sig is not None:
+        s, fy = (np.asarray(x, float) for x in sig)
+        tail = s >= s[-1] - 0.05 * (s[-1] - s[0])
+        fss = float(np.mean(fy[tail]))
+        if fss:
+            over = float(np.max(fy[s > 0] / fss)) - 1
+            if over > 0.02:
+                parts.append(f"the shell's F_y overshoots by {_p(over)} (a lightly damped carcass mode: it reaches "
+                             f"63 % sooner than a lag does)")
+    txt = "; ".join(parts)
+    if state == PARTIAL:
+        txt += "; the rest is not established"
+    return state, txt
