@@ -5,8 +5,8 @@ history plus the check runs of rounds < k, corrects its predictive variance by k
 over those runs (`calibrate_variance`, check.variance = scale | floor | wider), and is checked on
 round k's fresh draws. This script replays that on a finished sample folder for every form (and
 without correction), scoring each refined emulator on the draws of the round it never saw, so the
-forms are compared on the same simulator runs. No simulator runs: only emulator fits (GP, ~1 min a
-round on 2 cores).
+forms are compared on the same simulator runs. No simulator runs: only emulator fits, the k-fold ones
+once for every form (GP: 59 s for two rounds on 2 cores; 2 min 26 s when each form refitted the folds).
 
     jtire sample configs/calibration/posterior.toml --out runs/sample/study --check   # >= 2 rounds
     python benchmarks/bench_variance_forms.py --sample runs/sample/study --history runs/calibrate/study
@@ -25,7 +25,7 @@ import jtire  # noqa: F401  (float64)
 from jtire.calibration.emulator import fit_emulator
 from jtire.calibration.posterior_report import coverage
 from jtire.calibration.posterior_spec import load_posterior
-from jtire.calibration.sampling import calibrate_variance, refined_dir, training_data
+from jtire.calibration.sampling import held_out_residuals, refined_dir, training_data, variance_correction
 from jtire.resources import config_path
 
 # Previous figures (2-core machine, default-mesh study calibration, 45 runs; the check draws of a
@@ -65,10 +65,11 @@ def main(argv=None):
         ex_t, ex_y = ex_t[good], ex_y[good]
         emu = fit_emulator(spec.calibration.space, names, np.vstack([th, ex_t]), np.vstack([y, ex_y]),
                            spec.candidates, spec.emulator_seed)
+        r, v = held_out_residuals(spec, th, y, ex_t, ex_y)  # the fold fits once, for every form
         for form in ("none", "scale", "floor", "wider"):
             emu.var_scale = emu.var_floor = None
             if form != "none":
-                emu.var_scale, emu.var_floor, _ = calibrate_variance(spec, th, y, ex_t, ex_y, form=form)
+                emu.var_scale, emu.var_floor = variance_correction(r, v, form=form)
             cov = coverage(emu, *checks[k])["coverage"]
             print(f"| {k} | {len(th) + len(ex_t)} | {form} | " + " | ".join(f"{cov[n]:.2f}" for n in names)
                   + f" | {PREVIOUS.get((k, form), '')} |", flush=True)

@@ -53,7 +53,8 @@ from .simulator import check_batch, pieces
 from ..io import append_jsonl, atomic_write_csv, atomic_write_json, atomic_write_text, read_jsonl
 
 __all__ = ["run_posterior", "training_data", "start_walkers", "discrepancy_sd",
-           "calibrate_variance", "conformal_scale", "conformal_floor", "COVERAGE_OK"]
+           "calibrate_variance", "held_out_residuals", "variance_correction", "conformal_scale",
+           "conformal_floor", "COVERAGE_OK"]
 
 COVERAGE_OK = (0.80, 0.97)  # the band a 90 % interval's observed coverage over 32 draws should hit
 
@@ -120,6 +121,17 @@ def calibrate_variance(spec, thetas, y, extra_thetas, extra_y, level: float = 0.
     conformal guarantee under either: it is the conservative choice.
 
     Returns (a (m,), b (m,), z (k, m) held-out residuals in units of the uncorrected sd)."""
+    r, v = held_out_residuals(spec, thetas, y, extra_thetas, extra_y)
+    a, b = variance_correction(r, v, level, form)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = r / np.sqrt(v)
+    return a, b, z
+
+
+def held_out_residuals(spec, thetas, y, extra_thetas, extra_y) -> tuple:
+    """k-fold held-out ln residuals r (k, m) and predictive variances v (k, m) of the extra runs:
+    each fold (spec.check folds, seeded) predicted by an emulator trained on (thetas, y) and the
+    other folds."""
     cal = spec.calibration
     names = [t.name for t in cal.targets]
     k = len(extra_thetas)
@@ -134,17 +146,23 @@ def calibrate_variance(spec, thetas, y, extra_thetas, extra_y, level: float = 0.
         mu, var = emu.predict(extra_thetas[f])
         with np.errstate(invalid="ignore", divide="ignore"):
             r[f], v[f] = np.log(extra_y[f]) - mu, var
-    with np.errstate(invalid="ignore", divide="ignore"):
-        z = r / np.sqrt(v)
+    return r, v
+
+
+def variance_correction(r, v, level: float = 0.9, form: str = "floor") -> tuple:
+    """(a (m,), b (m,)) of `calibrate_variance`'s form from held-out residuals r and variances v (k, m)."""
     if form not in ("scale", "floor", "wider"):
         raise ValueError(f"form = {form!r}: 'scale', 'floor' or 'wider'")
-    a = np.clip([conformal_scale(z[:, j], level) for j in range(len(names))], 1e-4, 1e6)
-    b = np.zeros(len(names))
-    for j in range(len(names)):
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = r / np.sqrt(v)
+    m = r.shape[1]
+    a = np.clip([conformal_scale(z[:, j], level) for j in range(m)], 1e-4, 1e6)
+    b = np.zeros(m)
+    for j in range(m):
         if form != "scale" and a[j] > 1.0:
             b[j] = conformal_floor(r[:, j], v[:, j], level)
             a[j] = 1.0 if form == "floor" else a[j]
-    return np.asarray(a, float), b, z
+    return np.asarray(a, float), b
 
 
 def conformal_floor(r, v, level: float = 0.9) -> float:

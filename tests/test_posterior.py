@@ -268,12 +268,12 @@ def test_variance_calibration_gives_the_stated_coverage():
     th, y = runs(400, 0.01, -1, 1)
     ex_t, ex_y = runs(100, 0.04, 0.2, 0.6)
     fresh_t, fresh_y = runs(2000, 0.04, 0.2, 0.6)
+    emu = fit_emulator(space, names, np.vstack([th, ex_t]), np.vstack([y, ex_y]), ("linear",))
     for form in ("scale", "floor", "wider"):
         a, b, z = calibrate_variance(spec, th, y, ex_t, ex_y, form=form)
         # the uncalibrated intervals were too narrow: a factor > 2, and/or a floor sd of at least 0.02
         assert np.all(a > 2.0) if form != "floor" else np.all(a == 1.0), (form, a)
         assert np.all(b == 0) if form == "scale" else np.all(b > 0.02**2), (form, b)
-        emu = fit_emulator(space, names, np.vstack([th, ex_t]), np.vstack([y, ex_y]), ("linear",))
         emu.var_scale, emu.var_floor = a, b
         cov = coverage(emu, fresh_t, fresh_y)["coverage"]
         for name in names:
