@@ -25,7 +25,8 @@ import jtire  # noqa: F401  (float64)
 from jtire.calibration.emulator import fit_emulator
 from jtire.calibration.posterior_report import coverage
 from jtire.calibration.posterior_spec import load_posterior
-from jtire.calibration.sampling import held_out_residuals, refined_dir, training_data, variance_correction
+from jtire.calibration.sampling import (held_out_residuals, refined_dir, training_data, usable,
+                                       variance_correction)
 from jtire.resources import config_path
 
 # Previous figures (2-core machine, default-mesh study calibration, 45 runs; the check draws of a
@@ -61,7 +62,7 @@ def main(argv=None):
     for k in range(1, len(checks)):
         ex_t = np.vstack([c[0] for c in checks[:k]])
         ex_y = np.vstack([c[1] for c in checks[:k]])
-        good = np.all(np.isfinite(ex_y) & (ex_y > 0), axis=1)
+        good = usable(ex_y)
         ex_t, ex_y = ex_t[good], ex_y[good]
         emu = fit_emulator(spec.calibration.space, names, np.vstack([th, ex_t]), np.vstack([y, ex_y]),
                            spec.candidates, spec.emulator_seed)

@@ -27,6 +27,7 @@ from ..surrogates import fit_quadratic, n_terms
 __all__ = ["Emulator", "fit_emulator", "gp_available", "CANDIDATES"]
 
 CANDIDATES = ("linear", "reduced", "full", "gp")
+GP_RESTARTS = 2  # seeded restarts of the maximum-likelihood fit of the GP hyperparameters
 
 
 def gp_available() -> bool:
@@ -67,7 +68,7 @@ class _GP:
         rs = (r - self.mu) / self.sd
         kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.full(d, 0.5), (1e-2, 1e2))
                   + WhiteKernel(1e-2, (1e-8, 1e1)))
-        self.gp = GaussianProcessRegressor(kernel, n_restarts_optimizer=2, random_state=seed)
+        self.gp = GaussianProcessRegressor(kernel, n_restarts_optimizer=GP_RESTARTS, random_state=seed)
         import warnings
 
         from sklearn.exceptions import ConvergenceWarning

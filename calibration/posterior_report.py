@@ -21,7 +21,8 @@ from .posterior import prior_interval
 from .targets import derived_quantity
 from ..io import atomic_savefig
 
-__all__ = ["predictive", "widths", "plot_corner", "simulator_check", "check_draws", "coverage"]
+__all__ = ["predictive", "widths", "plot_corner", "simulator_check", "check_draws", "coverage",
+           "coverage_interval"]
 
 _Z90 = float(stats.norm.ppf(0.95))
 
@@ -114,8 +115,22 @@ def coverage(emulator, thetas, y, level: float = 0.9) -> dict:
     ok = np.all(np.isfinite(z), axis=1)
     cover = {name: float(np.mean(np.abs(z[ok, i]) <= zq)) if ok.any() else float("nan")
              for i, name in enumerate(emulator.names)}
-    return {"coverage": cover, "level": level, "n": int(ok.sum()), "n_requested": len(thetas),
+    inside = {name: int(np.sum(np.abs(z[ok, i]) <= zq)) for i, name in enumerate(emulator.names)}
+    n = int(ok.sum())
+    return {"coverage": cover, "inside": inside,
+            "coverage_interval": {k: coverage_interval(v, n) for k, v in inside.items()},
+            "level": level, "n": n, "n_requested": len(thetas),
             "z": z, "thetas": np.asarray(thetas), "simulated": y}
+
+
+def coverage_interval(inside: int, n: int, confidence: float = 0.9) -> list:
+    """[lower, upper]: exact (Clopper-Pearson) `confidence` interval of an interval's true coverage
+    from `inside` of n draws falling in it. 32 of 32 gives [0.911, 1], 29 of 32 [0.775, 0.974]:
+    32 draws pin a coverage down to about +-0.1. No draws: [nan, nan]."""
+    if n <= 0:
+        return [float("nan"), float("nan")]
+    ci = stats.binomtest(int(inside), int(n)).proportion_ci(confidence_level=confidence, method="exact")
+    return [float(ci.low), float(ci.high)]
 
 
 def simulator_check(sim, emulator, samples, n_draws: int = 32, seed: int = 0,

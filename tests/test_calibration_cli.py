@@ -170,7 +170,13 @@ def test_sample_short_run_says_not_converged(tmp_path, capsys):
     for name in ("chain.h5", "diagnostics.json", "predictive.csv", "widths.csv", "corner.png",
                  "emulator.json", "check.json"):
         assert (out / name).is_file(), name
-    assert json.loads((out / "check.json").read_text())["n"] == 32
+    chk = json.loads((out / "check.json").read_text())
+    assert chk["n"] == 32
+    for name, cov in chk["coverage"].items():  # the count inside and the exact interval of the truth
+        k = chk["inside"][name]
+        assert k / 32 == cov and f"{name} {cov:.2f} ({k}/32; " in text
+        lo, hi = chk["coverage_interval"][name]
+        assert lo <= cov <= hi
     if "refined round" in text:  # the stand-in's coverage was off: a refined round ran
         assert json.loads((out / "refined" / "check.json").read_text())["n"] == 32
         assert "variance_scale" in json.loads((out / "refined" / "emulator.json").read_text())
