@@ -24,10 +24,18 @@ import numpy as np
 from ..errors import ConfigError
 from ..surrogates import fit_quadratic, n_terms
 
-__all__ = ["Emulator", "fit_emulator", "gp_available", "CANDIDATES"]
+__all__ = ["Emulator", "fit_emulator", "gp_available", "usable", "CANDIDATES"]
 
 CANDIDATES = ("linear", "reduced", "full", "gp")
 GP_RESTARTS = 2  # seeded restarts of the maximum-likelihood fit of the GP hyperparameters
+
+
+def usable(y) -> np.ndarray:
+    """Rows (n,) of responses y (n, m) that a run gave in full: every value finite and > 0 (the
+    emulator models ln(response))."""
+    y = np.asarray(y, float)
+    with np.errstate(invalid="ignore"):
+        return np.all(np.isfinite(y) & (y > 0), axis=1)
 
 
 def gp_available() -> bool:
@@ -108,7 +116,7 @@ class Emulator:
     LOO RMSE of ln(response)}} for every candidate tried; n_points: training points;
     var_scale a, var_floor b: (m,) the predictive variance v becomes max(a v, v + b) where b > 0, and
     a v where b = 0 (a = 1, b = 0 unless calibrated on held-out simulator runs:
-    `calibration.sampling.calibrate_variance`).
+    `calibration.conformal.calibrate_variance`).
     """
 
     space: object
@@ -168,8 +176,7 @@ def fit_emulator(space, names, thetas, responses, candidates=CANDIDATES, seed: i
     """
     thetas = np.atleast_2d(np.asarray(thetas, float))
     y = np.asarray(responses, float).reshape(thetas.shape[0], -1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ok = np.all(np.isfinite(y) & (y > 0), axis=1) & np.all(np.isfinite(thetas), axis=1)
+    ok = usable(y) & np.all(np.isfinite(thetas), axis=1)
     u, ly = space.to_unit(thetas[ok]), np.log(y[ok])
     if u.shape[0] < space.d + 2:
         raise ConfigError(f"emulator: {u.shape[0]} usable simulator runs for {space.d} parameters; "

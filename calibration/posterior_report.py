@@ -113,10 +113,9 @@ def coverage(emulator, thetas, y, level: float = 0.9) -> dict:
         z = (np.log(y) - mu) / np.sqrt(var)
     zq = float(stats.norm.ppf(0.5 + level / 2))
     ok = np.all(np.isfinite(z), axis=1)
-    cover = {name: float(np.mean(np.abs(z[ok, i]) <= zq)) if ok.any() else float("nan")
-             for i, name in enumerate(emulator.names)}
-    inside = {name: int(np.sum(np.abs(z[ok, i]) <= zq)) for i, name in enumerate(emulator.names)}
     n = int(ok.sum())
+    inside = {name: int(np.sum(np.abs(z[ok, i]) <= zq)) for i, name in enumerate(emulator.names)}
+    cover = {name: k / n if n else float("nan") for name, k in inside.items()}
     return {"coverage": cover, "inside": inside,
             "coverage_interval": {k: coverage_interval(v, n) for k, v in inside.items()},
             "level": level, "n": n, "n_requested": len(thetas),

@@ -12,7 +12,7 @@
                  moves = "de" | "stretch", coordinates = "logit" | "log"
     [check]      draws, seed, refine = true | false, folds, rounds (refined rounds at most),
                  variance = "wider" | "floor" | "scale" (how the held-out runs correct the predictive variance:
-                 calibration.sampling.calibrate_variance)
+                 calibration.conformal.calibrate_variance)
 """
 
 import dataclasses

@@ -31,7 +31,8 @@ def run_cli(args, say) -> int:
     import dataclasses
 
     from ..calibration.posterior_spec import load_posterior
-    from ..calibration.sampling import COVERAGE_OK, band_chance, run_posterior
+    from ..calibration.conformal import COVERAGE_OK, band_chance
+    from ..calibration.sampling import run_posterior
     from .calibrate import _case_bar, simulator_for
 
     spec = load_posterior(args.config, args.set)
@@ -76,10 +77,10 @@ def run_cli(args, say) -> int:
             say(f"  {', '.join(high)}: above {COVERAGE_OK[1]:.0%}: the intervals are wider than the stated "
                 "level needs (conservative)")
         if low or high:
-            n_cal, n = r["rounds"][-1]["n_check_runs"], final["check"]["n"]
+            n_cal, n = final["n_check_runs"], final["check"]["n"]
             say(f"  (an interval made exactly valid on {n_cal} held-out runs shows a coverage inside "
                 f"{COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%} on {n} draws with chance "
-                f"{band_chance(n_cal, n):.2f} per response: calibration.sampling.band_chance)")
+                f"{band_chance(n_cal, n):.2f} per response: calibration.conformal.band_chance)")
     return 0 if final["result"].converged else 1
 
 
