@@ -22,7 +22,7 @@ import math
 from pathlib import Path
 
 from ..schema import Field as F
-from ..config import apply_overrides, load_toml, tire_from_dict, validate_table
+from ..config import apply_overrides, load_toml, read_tire_file, validate_table
 from ..errors import ConfigError
 from .arsm_multi import DEFAULT_SURFACE, FILLS, RULES, WEIGHTINGS
 from .response_surfaces import KINDS
@@ -122,12 +122,7 @@ def load_calibration(path, overrides=(), data_dir=None, tire_path=None) -> Calib
     if not isinstance(raw.get("tire_file"), str):
         raise ConfigError("tire_file: missing (path of the tire TOML, relative to this config)")
     tire_path = Path(tire_path).resolve() if tire_path is not None else (path.parent / raw["tire_file"]).resolve()
-    tire_raw = apply_overrides(load_toml(tire_path, "tire file"),
-                               [o[5:] for o in overrides if o.startswith("tire.")])
-    try:
-        tire = tire_from_dict(tire_raw)
-    except ConfigError as e:  # named as `--set tire.<field>` would name it, with the file
-        raise ConfigError(f"tire file {tire_path.name}: tire.{e}") from None
+    tire_raw, tire = read_tire_file(tire_path, [o[5:] for o in overrides if o.startswith("tire.")])
     base = params_from_spec(tire)
     method = raw.get("method", "arsm")
     if method not in METHODS:

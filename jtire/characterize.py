@@ -19,7 +19,7 @@ import numpy as np
 
 from . import batch
 from . import units as U
-from .config import parse_solver, read_toml, tire_from_dict, validate_table
+from .config import parse_solver, read_tire_file, read_toml, validate_table
 from .errors import ConfigError
 from .fingerprint import claim_folder, code_version
 from .io import atomic_write_csv, atomic_write_text, check_writable
@@ -77,8 +77,7 @@ def load_plan(path, tire_file=None, overrides=()) -> Plan:
         tire_path = (path.parent / raw["tire_file"]).resolve()
     else:
         raise ConfigError("tire_file: missing (path of the tire TOML, relative to this config), or give --tire")
-    tire_raw = apply_overrides(read_toml(tire_path, "tire file"), tire_over)
-    tire = tire_from_dict(tire_raw)
+    _, tire = read_tire_file(tire_path, tire_over)
     solver = parse_solver(raw.get("solver", {}))
     proto = Protocol.from_dict(solver)
     exps = tuple(REGISTRY[n].from_table(validate_table(raw.get(n, {}), REGISTRY[n].schema, n), proto, tire)
@@ -200,18 +199,20 @@ def _summary(folder, names, conds, results, per_pressure):
 
 
 def tire_info(plan: Plan):
-    """The rigid-ring TireInfo of the characterized tire (from its config; the model's own inertias
-    where the config gives none)."""
+    """The rigid-ring TireInfo of the characterized tire (from its config): the belt inertias are the
+    ones E05 and E08 took for their damping (the model's own unless their table says inertia = "study")."""
+    from .experiments.sidewall import decay_inertia
     from .mesh import build_mesh
     from .rigid_ring.table import TireInfo
 
     s = plan.tire
     g = s.geometry
     own = build_mesh(g, s.masses, s.n_theta, s.n_side, s.n_crown).masses()
+    choice = {e.name: getattr(e, "inertia", "model") for e in plan.experiments}
     return TireInfo(name=s.size or plan.tire_path.stem, m_b_kg=s.masses.belt, m_tot_kg=s.masses.tire + s.masses.rim,
                     tire_mass_kg=s.masses.tire, rim_mass_kg=s.masses.rim,
-                    I_by_kgm2=s.reference["belt_Iy_kgm2"] or own["belt_Iy_kgm2"],
-                    I_bx_kgm2=s.reference["belt_Ix_kgm2"] or own["belt_Ix_kgm2"],
+                    I_by_kgm2=decay_inertia(s, own, "belt_Iy_kgm2", choice.get("inplane_rotation", "model")),
+                    I_bx_kgm2=decay_inertia(s, own, "belt_Ix_kgm2", choice.get("sidewall_camber", "model")),
                     I_ay_kgm2=s.masses.rim_Iy, I_ax_kgm2=s.masses.rim_Ixz, unloaded_radius_m=g.outer_radius,
                     width_m=g.section_width, rim_radius_m=g.rim_radius, rim_width_m=g.rim_width,
                     aspect_ratio=g.section_height / g.section_width, rated_load_N=plan.rated["load_N"],

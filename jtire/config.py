@@ -210,7 +210,20 @@ def tire_from_dict(raw: dict) -> TireSpec:
 
 
 def load_tire(path, overrides=()) -> TireSpec:
-    return tire_from_dict(apply_overrides(load_toml(path), overrides))
+    return read_tire_file(path, overrides)[1]
+
+
+def read_tire_file(path, overrides=()) -> tuple:
+    """(raw dict after overrides, TireSpec) of a tire file; overrides are `section.key=value`
+    (the `tire.` of `--set tire.<section>.<key>` taken off). A bad field is named as `--set tire.<field>`
+    would name it, with the file: every command that reads a tire file (run, sweep, characterize,
+    calibrate) says it the same way."""
+    path = Path(path)
+    raw = apply_overrides(read_toml(path, "tire file"), overrides)
+    try:
+        return raw, tire_from_dict(raw)
+    except ConfigError as e:
+        raise ConfigError(f"tire file {path.name}: tire.{e}") from None
 
 
 # ---- experiment configs ------------------------------------------------------------------------
@@ -328,13 +341,7 @@ def load_run_config(path, overrides=(), registry=None) -> RunConfig:
         raise ConfigError("description: must be a string")
     if "tire_file" not in raw or not isinstance(raw["tire_file"], str):
         raise ConfigError("tire_file: missing (path of the tire TOML, relative to this config)")
-    tire_path = (path.parent / raw["tire_file"]).resolve()
-    tire_raw = read_toml(tire_path, "tire file")
-    apply_overrides(tire_raw, tire_over)
-    try:
-        tire = tire_from_dict(tire_raw)
-    except ConfigError as e:
-        raise ConfigError(f"tire file {tire_path.name}: tire.{e}" if not str(e).startswith(str(tire_path)) else str(e)) from None
+    _, tire = read_tire_file((path.parent / raw["tire_file"]).resolve(), tire_over)
     solver = parse_solver(raw.get("solver", {}))
     proto = Protocol.from_dict(solver)
     tables = {n: validate_table(raw.get(n, {}), registry[n].schema, n) for n in registry if n in raw or n in names}

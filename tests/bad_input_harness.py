@@ -75,13 +75,12 @@ def trap_simulations(monkeypatch):
 class Case:
     """argv(tmp) -> list of arguments (the inputs written under tmp); words: in the error line."""
 
-    def __init__(self, name, argv, *words, xfail=None):
-        self.name, self.argv, self.words, self.xfail = name, argv, words, xfail
+    def __init__(self, name, argv, *words):
+        self.name, self.argv, self.words = name, argv, words
         self.command = None  # set from the first argument when run
 
     def param(self):
-        marks = [pytest.mark.xfail(reason=self.xfail, strict=True)] if self.xfail else []
-        return pytest.param(self, id=self.name, marks=marks)
+        return pytest.param(self, id=self.name)
 
 
 def _w(tmp, name, data):
@@ -141,8 +140,6 @@ def _out(tmp):
 
 
 NON_UTF8 = b"# jtire config\nexperiment = \"footprint\"\n# caf\xe9 \xff\n"
-TIRE_PREFIX_XFAIL = ("jtire/characterize.py load_plan calls tire_from_dict without the 'tire file NAME: tire.' "
-                     "prefix that load_run_config and calibration.spec give (owned by another helper)")
 
 
 def _npz(folder, **arrays):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from .bad_input_harness import (
-    Case, check_one_line, CHAR, COND, FOOTPRINT, NON_UTF8, TIRE_PREFIX_XFAIL, VERTICAL, _blocked,
+    Case, check_one_line, CHAR, COND, FOOTPRINT, NON_UTF8, VERTICAL, _blocked,
     _characterize_claimed, _exp, _exp_bytes_tire, _npz, _out, _sweep_claimed, _w)
 
 CASES = [
@@ -95,7 +95,7 @@ CASES = [
         "--set", "vertical_stiffness.max_load_kN=70"], "holds results made with other settings"),
     Case("characterize-tire-error-names-file", lambda t: ["characterize", _exp(t, CHAR, name="char.toml"), "--set",
                                                           "tire.tire.tread_width_mm=1000", *_out(t)],
-         "tire file tire.toml: tire.tire.tread_width_mm = 1000", xfail=TIRE_PREFIX_XFAIL),
+         "tire file tire.toml: tire.tire.tread_width_mm = 1000"),
     # ---- export-tir ------------------------------------------------------------------------------
     Case("export-tir-missing", lambda t: ["export-tir", str(Path(t) / "none.json")], "no file"),
     Case("export-tir-non-utf8", lambda t: ["export-tir", _w(t, "c.json", b"\xff")], "c.json: not UTF-8"),
