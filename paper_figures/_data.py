@@ -221,9 +221,9 @@ def _case_name(i: int, c: dict) -> str:
 def _write_case(folder: Path, result, tables: dict) -> None:
     from jtire.io import atomic_write_csv
 
-    result.write(folder)
-    for name, cols in tables.items():
+    for name, cols in tables.items():  # before result.json, which marks the case done
         atomic_write_csv(folder / f"{name}.csv", None, {k: np.asarray(v) for k, v in cols.items()})
+    result.write(folder)
 
 
 def _write_summary(folder: Path, cases: list) -> None:

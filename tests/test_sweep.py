@@ -97,6 +97,52 @@ def test_rerun_with_other_settings_refuses_in_one_line(killed_and_resumed, capsy
     assert {f: f.stat().st_mtime_ns for f in results(out)} == before
 
 
+# ---- a kill between a case's signals.csv and its result.json ---------------------------------------------
+class _Killed(BaseException):
+    """Stands for SIGKILL: nothing in the command catches it."""
+
+
+VERTICAL = REPO / "configs" / "experiments" / "vertical_stiffness.toml"
+# 2 cases of E02 (static method: solved case by case, each saved as it finishes; it has signals.csv)
+VERTICAL_ARGS = [str(VERTICAL), *[a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)],
+                 "--set", "sweep.loads_kg=[2312.5, 4625.0]", "--set", "sweep.pressures_psi=[120.0]"]
+
+
+def test_kill_between_signals_and_result_redoes_the_case(tmp_path, monkeypatch, capsys):
+    """A case's result.json marks it done, so it is written last: killed after the second case's
+    signals.csv and before its result.json, the rerun counts 1 of 2 done, leaves the first case as it
+    was and runs the second again (its signals.csv rewritten, the same numbers)."""
+    import jtire.experiments.result as result_mod
+
+    out = tmp_path / "grid"
+    real, calls = result_mod.atomic_write_json, []
+
+    def killed_on_the_second(path, obj):
+        calls.append(path)
+        if len(calls) == 2:
+            assert (path.parent / "signals.csv").is_file()  # the signals are on disk already
+            raise _Killed
+        return real(path, obj)
+
+    monkeypatch.setattr(result_mod, "atomic_write_json", killed_on_the_second)
+    with pytest.raises(_Killed):
+        main(["sweep", *VERTICAL_ARGS, "--out", str(out)])
+    monkeypatch.setattr(result_mod, "atomic_write_json", real)
+    (first,) = results(out)
+    killed = calls[1].parent
+    assert killed != first.parent and not (killed / "result.json").exists()
+    before = (first.read_bytes(), first.stat().st_mtime_ns)
+    signals = (killed / "signals.csv").read_text()
+    stale = (killed / "signals.csv").stat().st_ino
+    capsys.readouterr()
+    assert main(["sweep", *VERTICAL_ARGS, "--out", str(out)]) == 0
+    assert "resuming: 1 of 2 cases already done" in capsys.readouterr().err
+    assert (first.read_bytes(), first.stat().st_mtime_ns) == before
+    assert (killed / "result.json").is_file() and (killed / "signals.csv").stat().st_ino != stale  # run again
+    assert (killed / "signals.csv").read_text() == signals
+    assert json.loads((killed / "result.json").read_text())["quantities"]["k_sv_N_per_m"] > 0
+
+
 # ---- case names ----------------------------------------------------------------------------------------
 def test_case_names_cannot_collide():
     # values that print alike (4 significant digits of psi, 6 of kg) still get their own folders: the

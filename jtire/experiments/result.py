@@ -26,11 +26,14 @@ class ExperimentResult:
                 "checks": self.checks, "info": self.info}
 
     def write(self, out_dir) -> list:
+        """signals.csv, then result.json, each atomically: result.json marks the case done (a resume
+        skips a folder that has it), so it goes last and a kill between the two redoes the case."""
         out = Path(out_dir)
-        written = [atomic_write_json(out / "result.json", self.to_json_dict())]
+        written = []
         if self.signals:
             n = {len(np.atleast_1d(v)) for v in self.signals.values()}
             if len(n) != 1:
                 raise ValueError(f"signals of unequal length: { {k: len(v) for k, v in self.signals.items()} }")
             written.append(atomic_write_csv(out / "signals.csv", None, {k: np.asarray(v) for k, v in self.signals.items()}))
+        written.append(atomic_write_json(out / "result.json", self.to_json_dict()))
         return written
