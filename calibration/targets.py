@@ -122,6 +122,10 @@ def parse_targets(raw, data_dir=None) -> tuple:
         if not isinstance(t.get("table", {}), dict):
             raise ConfigError(f"{at}.table: must be a table (the fields of [{exp}])")
         table = validate_table(t.get("table", {}), REGISTRY[exp].schema, f"{at}.table")
+        produced = REGISTRY[exp].produces(table)
+        if quantity not in produced:  # a typo would otherwise end the first simulation in a KeyError
+            raise ConfigError(f"{at}.quantity = {quantity!r}: not a quantity {exp} produces (allowed: "
+                              f"{', '.join(produced)})")
         given = [k for k in t if k.startswith("measured")]
         if len(given) != 1:
             raise ConfigError(f"{at}: give exactly one of measured_<unit> (unit in "

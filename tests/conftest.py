@@ -98,6 +98,7 @@ class Run:
     traces_before: int
     devices: int  # devices the batch ran on
     order: int  # runs made before this one in the session
+    table: dict = dataclasses.field(default_factory=dict)  # the experiment's table (file units)
 
 
 class Runs:
@@ -118,7 +119,7 @@ class Runs:
             res = batch.run(exp, tire, [dict(c) for c in conditions], devices=devices, keep_outputs=True)
             n_cases = sum(len(exp.cases(c)) for c in conditions)
             self.cache[key] = Run(exp, res, batch.program_traces() - before, before,
-                                  batch.n_devices_for(n_cases, devices), len(self.cache))
+                                  batch.n_devices_for(n_cases, devices), len(self.cache), dict(table))
         return self.cache[key]
 
 

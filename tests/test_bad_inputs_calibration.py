@@ -116,6 +116,15 @@ CASES = [
          "colour: unknown field"),
     Case("calibrate-negative-target", lambda t: ["calibrate", STUDY, "--standin", "--set",
                                                  "targets.DZ.measured_mm=-1", *_out(t)], "targets.DZ.measured_mm = -1"),
+    # a quantity the experiment does not produce (a typo): refused with the allowed names, on the shell
+    # model too (it used to simulate for minutes, then end in a KeyError)
+    Case("calibrate-target-quantity-typo", lambda t: ["calibrate", STUDY, "--set", 'targets.DZ.quantity="deflection_mm"',
+                                                      *_out(t)],
+         "targets.DZ.quantity = 'deflection_mm': not a quantity vertical_stiffness produces", "allowed: k_sv_N_per_m",
+         "deflection_m"),
+    Case("calibrate-target-decay-without-decay", lambda t: ["calibrate", STUDY, "--standin", "--set",
+                                                            'targets.DY.quantity="C_l_Ns_per_m"', *_out(t)],
+         "targets.DY.quantity = 'C_l_Ns_per_m'", "allowed: k_l_N_per_m, lateral_deflection_m, lateral_force_N)"),
     Case("calibrate-out-unwritable", lambda t: ["calibrate", STUDY, "--standin", "--out", _blocked(t)],
          "cannot read or write"),
     Case("calibrate-method-choice", lambda t: ["calibrate", STUDY, "--method", "newton", *_out(t)],

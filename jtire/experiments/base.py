@@ -35,6 +35,7 @@ class Experiment(eqx.Module):
     per_pressure: ClassVar[bool] = False  # the load does not enter (E05, E07, E08)
     aux_names: ClassVar[tuple] = ()  # names of the case's aux values (case dict keys)
     traced_names: ClassVar[tuple] = ()  # quantities `traced` returns
+    quantity_names: ClassVar[tuple] = ()  # quantities `reduce` writes into result.json (see `produces`)
 
     proto: Protocol
 
@@ -52,6 +53,13 @@ class Experiment(eqx.Module):
     def from_table(cls, table: dict, proto: Protocol, tire_spec) -> "Experiment":
         """Build from the validated table (SI values); cross-field checks raise ConfigError here,
         before anything is simulated."""
+
+    @classmethod
+    def produces(cls, table: dict) -> tuple:
+        """The quantity names `reduce` writes with this validated table (SI): `quantity_names`, unless
+        an option of the table adds or removes some. Calibration targets are checked against it before
+        anything runs; the tests check it against what `reduce` wrote."""
+        return cls.quantity_names
 
     def cases(self, condition: dict) -> list:
         """Host case dicts ({"load_N", "pressure_Pa", *aux_names}) for one condition."""

@@ -78,6 +78,10 @@ class DrumCleat(Experiment):
         "pad_resolution_Hz": Field(float, 1, 1e-4, 0.2, 0.01, "Hz"),
     }
     traced_names = ()
+    quantity_names = ("first_mode_Hz", "k_dv_N_per_m", "first_mode_fit_fn_Hz", "k_dv_fit_N_per_m", "first_mode_fit_fd_Hz",
+                      "first_mode_xi", "first_mode_contact_force_Hz", "first_mode_contact_force_fit_fn_Hz",
+                      "first_mode_belt_displacement_Hz", "raw_resolution_Hz", "padded_resolution_Hz", "m_b_kg",
+                      "deflection_m", "contact_half_length_on_drum_m", "peak_axle_force_N", "static_axle_force_N")
 
     drum_radius: jax.Array
     speed: jax.Array

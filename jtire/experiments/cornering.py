@@ -84,6 +84,9 @@ class Cornering(Rolling):
                        "km_range_deg": Field(list, U.DEG, -30, 30, [0.0, 3.0], "deg")}
     aux_names = ("slip_angle",)
     traced_names = ("k_f_N_per_rad", "k_m_Nm_per_rad")
+    quantity_names = ("k_f_N_per_rad", "k_m_Nm_per_rad", "k_f_fit_r2", "k_m_fit_r2", "k_f_stderr_N_per_rad",
+                      "k_m_stderr_Nm_per_rad", "k_f_range_deg", "k_m_range_deg", "pneumatic_trail_m",
+                      "peak_lateral_force_N", "peak_lateral_force_over_load", "speed_m_per_s", "load_N")
 
     slip_angles: tuple = eqx.field(static=True, default=())
     kf_mask: tuple = eqx.field(static=True, default=())
@@ -169,6 +172,8 @@ class RelaxationLength(Experiment):
     name = "relaxation_length"
     study_id = "E11"
     description = "E11 relaxation length sigma = k_f / k_l (E10 small angles + static E09)"
+    quantity_names = ("sigma_m", "k_f_N_per_rad", "k_l_N_per_m", "k_f_fit_r2", "k_f_range_deg", "lateral_force_N",
+                      "lateral_deflection_m")
     schema = COMMON | {"slip_angles_deg": Field(list, U.DEG, -30, 30, [0, 1, 2], "deg", min_len=3),
                        "kf_range_deg": Field(list, U.DEG, -30, 30, [0.0, 2.0], "deg"),
                        "lateral_force_kN": Field(float, U.KN, 0.01, 100, 5.0, "kN")}

@@ -35,6 +35,13 @@ def decay_about_fit(t, x, mass, t_start):
     return signals.free_decay(t, x, mass, t_start=t_start, x_final=first.x_inf_fit)
 
 
+def decay_names(mass_name: str, c_name: str, c_unit: str) -> tuple:
+    """The names `decay_quantities` gives, in its order (for the experiments' `quantity_names`)."""
+    return (f"{c_name}_{c_unit}", f"{c_name}_2p_{c_unit}", f"{c_name}_fit_{c_unit}", "damping_method", "xi_2p",
+            "xi_fit", "xi_rel_diff_2p_vs_fit", "omega_n_2p_rad_per_s", "omega_n_fit_rad_per_s", "f_d_fit_Hz",
+            "log_decrement", mass_name, "xi_formula")
+
+
 def decay_quantities(fd, mass_name: str, c_name: str, c_unit: str) -> dict:
     """Two-peak and fitted damping of a free_decay result as SI-named quantities.
 
@@ -42,15 +49,11 @@ def decay_quantities(fd, mass_name: str, c_name: str, c_unit: str) -> dict:
     not be found, the fit's; `<c_name>_2p_<unit>`, `<c_name>_fit_<unit>` carry both.
     """
     c2p, cfit = fd.c_2p, fd.c_fit
-    return {
-        f"{c_name}_{c_unit}": c2p if fd.two_peak_ok else cfit,
-        f"{c_name}_2p_{c_unit}": c2p, f"{c_name}_fit_{c_unit}": cfit,
-        "damping_method": "two peaks" if fd.two_peak_ok else "damped-sine fit (no two clear peaks)",
-        "xi_2p": fd.xi_2p, "xi_fit": fd.xi_fit, "xi_rel_diff_2p_vs_fit": fd.rel_diff_xi,
-        "omega_n_2p_rad_per_s": fd.omega_n_2p, "omega_n_fit_rad_per_s": fd.omega_n_fit,
-        "f_d_fit_Hz": fd.omega_d_fit / (2 * np.pi), "log_decrement": fd.delta,
-        mass_name: fd.mass, "xi_formula": fd.xi_formula,
-    }
+    values = (c2p if fd.two_peak_ok else cfit, c2p, cfit,
+              "two peaks" if fd.two_peak_ok else "damped-sine fit (no two clear peaks)",
+              fd.xi_2p, fd.xi_fit, fd.rel_diff_xi, fd.omega_n_2p, fd.omega_n_fit, fd.omega_d_fit / (2 * np.pi),
+              fd.delta, fd.mass, fd.xi_formula)
+    return dict(zip(decay_names(mass_name, c_name, c_unit), values, strict=True))
 
 
 def decay_checks(fd, out, prefix="release") -> dict:

@@ -29,7 +29,7 @@ from ..errors import ConfigError
 from ..schema import Field
 from ..state import TireState
 from .base import Experiment
-from .decay import decay_checks, decay_quantities, release_branch, sample_times
+from .decay import decay_checks, decay_names, decay_quantities, release_branch, sample_times
 from .footprint import contact_check, run_info
 from .lateral import wheel_mass
 from .loads import DOWN, RIM_Z
@@ -45,6 +45,12 @@ class DropTest(Experiment):
     schema = {"drop_height_mm": Field(float, U.MM, 0, 200, 20.0, "mm between the lowest tread point and the road"),
               "duration_s": Field(float, 1, 0.05, 3, 0.4, "s of drop and free decay"),
               "gravity": Field(bool, default=False)}
+    quantity_names = (("C_tot_Ns_per_m", "C_tot_2p_Ns_per_m", "C_tot_fit_Ns_per_m", "k_sv_N_per_m", "k_sv_source",
+                       "static_deflection_m", "static_load_N", "m_tot_kg")
+                      + decay_names("decay_mass_kg", "C_tot_from_omega", "Ns_per_m")[1:]  # C: the rows above
+                      + ("k_from_frequency_N_per_m", "t_in_contact_from_s", "xi_in_contact_2p", "xi_in_contact_fit",
+                         "C_tot_in_contact_2p_Ns_per_m", "C_tot_in_contact_fit_Ns_per_m",
+                         "omega_n_in_contact_fit_rad_per_s"))
 
     drop_height: jax.Array
     duration: jax.Array

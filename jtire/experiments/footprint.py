@@ -49,6 +49,9 @@ class Footprint(Experiment):
     description = "E01 contact patch length and width"
     schema = {"method": Field(str, default="static", choices=("static", "transient"))}
     traced_names = ("contact_length_m", "contact_width_m", "deflection_m")
+    quantity_names = ("contact_length_m", "contact_width_m", "contact_half_length_m", "contact_area_m2",
+                      "deflection_m", "k_secant_N_per_m", "geometric_chord_m", "measured_contact_length_m",
+                      "measured_contact_width_m")
 
     method: str = eqx.field(static=True, default="static")
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)

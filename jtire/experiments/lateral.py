@@ -14,6 +14,8 @@ peaks and a damped-sine fit about the fitted final level (friction may keep the 
 pre-load position, reported).
 """
 
+from typing import ClassVar
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -25,7 +27,7 @@ from .. import units as U
 from ..errors import ConfigError
 from ..schema import Field
 from .base import Experiment
-from .decay import decay_about_fit, decay_checks, decay_quantities, release_branch, sample_times
+from .decay import decay_about_fit, decay_checks, decay_names, decay_quantities, release_branch, sample_times
 from .footprint import contact_check, loaded_plan, run_info
 from .loads import DOWN, LEFT, RIM_YZ
 from .phases import flat_road, load_branch
@@ -60,6 +62,8 @@ class LateralStiffness(Experiment):
               "release_ramp_ms": Field(float, U.MS, 0, 20, 1.0, "ms (0: a step)"),
               "method": Field(str, default="auto", choices=("auto", "static", "transient"))}
     traced_names = ("k_l_N_per_m", "lateral_deflection_m")
+    static_names: ClassVar[tuple] = ("k_l_N_per_m", "lateral_deflection_m", "lateral_force_N")
+    quantity_names = static_names + decay_names("decay_mass_kg", "C_l", "Ns_per_m")  # decay_s > 0
 
     force: jax.Array
     decay: jax.Array
@@ -67,6 +71,10 @@ class LateralStiffness(Experiment):
     with_decay: bool = eqx.field(static=True)
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)
     method: str = eqx.field(static=True, default="transient")
+
+    @classmethod
+    def produces(cls, table):
+        return cls.quantity_names if table["decay_s"] > 0 else cls.static_names
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):

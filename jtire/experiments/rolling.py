@@ -143,6 +143,12 @@ class RollingResistance(Rolling):
     schema = ROLLING_SCHEMA | {"calibration_loads_kN": Field(list, U.KN, 1, 500, [38.7, 41.4], "kN"),
                                "calibration_targets_N": Field(list, 1, 0, 1e5, [1529.39, 1701.11], "N")}
     traced_names = ("rolling_resistance_N", "rolling_resistance_from_power_N", "rrc")
+    quantity_names = ("rolling_resistance_N", "rrc", "rolling_resistance_stderr_N", "rolling_resistance_std_N",
+                      "dissipated_power_W", "rubber_power_W", "friction_power_W", "rolling_resistance_from_power_N",
+                      "rrc_from_power", "energy_balance_rel_diff", "unaccounted_power_W",
+                      "dissipated_power_halves_rel_diff", "vertical_force_N", "window_s",
+                      "effective_rolling_radius_m", "spin_rad_per_s", "deflection_m", "speed_m_per_s", "load_N",
+                      "target_N", "error_vs_target_rel")
 
     calibration: tuple = eqx.field(static=True, default=())
 

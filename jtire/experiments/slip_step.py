@@ -22,6 +22,13 @@ from .rolling import ROLLING_SCHEMA, Rolling
 from .stages import road_velocity, rolling_plan
 
 
+PER_SPEED = ("F_y_steady_SAE_N", "M_z_steady_SAE_Nm", "s63_m", "overshoot", "F_y_tail_drift_rel")  # + _<speed>
+
+
+def _names(speeds) -> tuple:
+    return tuple(f"{n}_{v:g}" for v in speeds for n in PER_SPEED) + ("slip_angle_deg", "load_N")
+
+
 class SlipStep(Rolling):
     name = "slip_step"
     study_id = "V03"
@@ -32,10 +39,15 @@ class SlipStep(Rolling):
         "distance_m": Field(float, 1, 0.2, 20, 3.0, "m rolled after the step (~8 relaxation lengths)"),
         "n_samples": Field(int, 1, 101, 4001, 601, "samples over the step record")}
     aux_names = ("speed",)
+    quantity_names = _names((5.0, 15.0))  # the default speeds; `produces` names those of the table
 
     speeds: tuple = eqx.field(static=True, default=())
     alpha: jax.Array = None
     distance: jax.Array = None
+
+    @classmethod
+    def produces(cls, table):
+        return _names(table["speeds_m_per_s"])
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):
@@ -86,9 +98,8 @@ class SlipStep(Rolling):
                 i = int(hit[0])
                 s63 = float(np.interp(0.632, [frac[i - 1], frac[i]], [s[i - 1], s[i]]))
             key = f"{v:g}"
-            q |= {f"F_y_steady_SAE_N_{key}": fy_ss, f"M_z_steady_SAE_Nm_{key}": mz_ss, f"s63_m_{key}": s63,
-                  f"overshoot_{key}": float(np.max(frac[s > 0]) - 1.0),
-                  f"F_y_tail_drift_rel_{key}": float(np.ptp(fy[tail]) / abs(fy_ss))}
+            values = (fy_ss, mz_ss, s63, float(np.max(frac[s > 0]) - 1.0), float(np.ptp(fy[tail]) / abs(fy_ss)))
+            q |= {f"{n}_{key}": x for n, x in zip(PER_SPEED, values, strict=True)}
             sig |= {f"distance_m_{key}": s, f"F_y_SAE_N_{key}": fy, f"M_z_SAE_Nm_{key}": mz}
         q |= {"slip_angle_deg": float(np.degrees(a)), "load_N": condition["load_N"]}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks,

@@ -78,6 +78,11 @@ class Traction(Experiment):
         "n_samples": Field(int, 1, 101, 4001, 601, "samples along the torque ramp"),
     }
     traced_names = ()
+    quantity_names = ("k_k_N_per_slip", "k_k_range_lo", "k_k_range_hi", "k_k_r2", "k_k_fit_range_N_per_slip",
+                      "fit_range_lo", "fit_range_hi", "fit_range_r2", "k_k_initial_N_per_slip", "k_cx_N_per_m",
+                      "k_cx_fit_range_N_per_m", "contact_half_length_m", "contact_half_length_source",
+                      "effective_rolling_radius_m", "max_slip", "max_force_x_N", "peak_wheel_torque_Nm",
+                      "mean_force_z_N", "deflection_m", "drum_speed_change_rel")
 
     drum_radius: jax.Array
     drum_inertia: jax.Array

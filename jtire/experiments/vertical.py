@@ -41,6 +41,8 @@ class VerticalStiffness(Experiment):
               "ramp_s": Field(float, 1, 0.02, 5, 0.9, "s"),  # 0.3 s read 4.8 % stiff at 45 kN (viscoelastic lag), 0.9 s 1.0 %
               "fit_range_kN": Field(list, U.KN, 0, 500, [10.0, 60.0], "kN")}
     traced_names = ("k_sv_N_per_m", "deflection_m")
+    quantity_names = ("k_sv_N_per_m", "k_sv_fit_N_per_m", "deflection_m", "stated_load_N", "max_load_N", "fit_r2",
+                      "settled_deflection_at_max_load_m")
 
     max_load: jax.Array
     stated_load: jax.Array  # N; 0: the condition's load
