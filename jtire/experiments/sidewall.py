@@ -10,7 +10,8 @@ Rim locked in all six DOFs, no road, the belt (crown part: belt, undertread, tre
     3. release: ramp the belt load off in `release_ramp` (1 ms: a step for the 25-40 Hz belt modes)
        with the settle damping OFF and record the belt's rigid motion; reduce it with
        `decay` (two peaks and a damped-sine fit) about the unloaded level, C = xi 2 M omega_n with M
-       from the tire config (E05: I_by, E07: m_b, E08: I_bx).
+       the model's own rigid belt (`Mesh.masses()`: E05 I_by, E07 m_b, E08 I_bx); E05 and E08 take the
+       study's inertias from the tire file's [reference] with `inertia = "study"` in their table.
 
 Loads, as the resultant `Drive.belt_load` takes (force, moment about the belt's mass centre):
     E05: circumferential force F at the belt radius r  -> M_y = F r    (k_btheta = F r / theta_ss)
@@ -29,10 +30,11 @@ import numpy as np
 
 from .. import signals, solve
 from .. import units as U
+from ..errors import ConfigError
 from ..schema import Field
 from ..state import TireState
 from .base import Experiment
-from .decay import decay_checks, decay_quantities, release_branch, sample_times
+from .decay import decay_checks, decay_names, decay_quantities, release_branch, sample_times
 from .footprint import run_info
 from .loads import RIM_LOCKED
 from .phases import FAR, flat_road, make_drive
@@ -40,6 +42,16 @@ from .program import Phase, check_phase, f64, phase, run_plan
 from .result import ExperimentResult
 
 ZERO6 = np.zeros(6)
+
+
+INERTIAS = ("model", "study")
+
+
+def decay_inertia(spec, own: dict, key: str, inertia: str = "model") -> float:
+    """The belt inertia `key` (belt_Iy_kgm2, belt_Ix_kgm2) of C = 2 I omega_n: the model's own (`own`:
+    `Mesh.masses()`), or the study's from the tire file's [reference] (inertia = "study"). The rigid
+    ring takes the same one, so its damping ratio is the one measured."""
+    return float(spec.reference[key]) if inertia == "study" else float(own[key])
 
 
 def belt_radius(model, y):
@@ -59,33 +71,46 @@ class _Sidewall(Experiment):
     c_unit: ClassVar[str]
     x_name: ClassVar[str]
     mass_name: ClassVar[str]
-    own_key: ClassVar[str]  # the model's own rigid-belt mass or inertia (`Mesh.masses()`)
-    ref_key: ClassVar[str]  # the tire config's value for M (`[reference]` or `[mass]`)
+    own_key: ClassVar[str]  # M: the model's own rigid-belt mass or inertia (`Mesh.masses()` key)
 
     force: jax.Array
     decay: jax.Array
     release_ramp: jax.Array
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)
+    inertia: str = eqx.field(static=True, default="model")  # E05, E08: "study" takes [reference]'s
 
     @staticmethod
-    def schema_for(force_kN, force_help):
-        return {"force_kN": Field(float, U.KN, 0.01, 200, force_kN, force_help),
-                "decay_s": Field(float, 1, 0.02, 2, 0.2, "s of free decay after the release"),
-                "release_ramp_ms": Field(float, U.MS, 0, 20, 1.0, "ms (0: a step)")}
+    def schema_for(force_kN, force_help, inertia=False):
+        s = {"force_kN": Field(float, U.KN, 0.01, 200, force_kN, force_help),
+             "decay_s": Field(float, 1, 0.02, 2, 0.2, "s of free decay after the release"),
+             "release_ramp_ms": Field(float, U.MS, 0, 20, 1.0, "ms (0: a step)")}
+        if inertia:  # the belt inertia of C = 2 I omega_n: the model's own, or the study's ([reference])
+            s["inertia"] = Field(str, default="model", choices=INERTIAS)
+        return s
+
+    @staticmethod
+    def names_for(k_name, x_name, load_name, mass_name, c_name, c_unit) -> tuple:
+        """Every quantity `reduce` writes (the subclasses' `quantity_names`)."""
+        return (k_name, x_name, load_name, "force_N", "belt_radius_m") + decay_names(mass_name, c_name, c_unit) + (
+            "decay_mass_source",)
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):
+        inertia = table.get("inertia", "model")
+        if inertia == "study" and not tire_spec.reference[cls.own_key]:
+            raise ConfigError(f"{cls.name}.inertia = 'study': the tire file's [reference] gives no {cls.own_key} "
+                              f"(allowed: {', '.join(INERTIAS)}; model: the model's own)")
         return cls(proto=proto, force=f64(table["force_kN"]), decay=f64(table["decay_s"]),
-                   release_ramp=f64(table["release_ramp_ms"]))
+                   release_ramp=f64(table["release_ramp_ms"]), inertia=inertia)
 
     def load6(self, r):
         raise NotImplementedError
 
     def decay_mass(self, tire) -> float:
-        """M of C_c = 2 M omega_n: the tire config's value (the study's), else the model's own."""
-        spec = tire.spec
-        ref = spec.masses.belt if self.ref_key == "belt_kg" else spec.reference[self.ref_key]
-        return ref or self.own_inertia(tire)
+        """M of C_c = 2 M omega_n: the model's own rigid belt, or the study's inertia (inertia = "study")."""
+        if self.own_key == "belt_kg":
+            return self.own_inertia(tire)
+        return decay_inertia(tire.spec, tire.mesh.masses(), self.own_key, self.inertia)
 
     def own_inertia(self, tire) -> float:
         return float(tire.mesh.masses()[self.own_key])
@@ -156,6 +181,7 @@ class _Sidewall(Experiment):
         q = {self.k_name: load / abs(x_ss), self.x_name: abs(x_ss),
              ("load_N" if key == "belt_disp" else "moment_Nm"): load, "force_N": float(self.force), "belt_radius_m": r}
         q |= decay_quantities(fd, self.mass_name, self.c_name, self.c_unit)
+        q["decay_mass_source"] = self.inertia  # "model": Mesh.masses(); "study": the tire file's [reference]
         own = self.own_inertia(tire)
         checks = {"inflate_settled": bool(inf.settled), "hold_settled": bool(held.settled),
                   "hold_t_s": float(held.t_end - held.t0),
@@ -177,12 +203,13 @@ class InplaneRotation(_Sidewall):
     name = "inplane_rotation"
     study_id = "E05"
     description = "E05 in-plane rotational sidewall stiffness and damping (k_btheta, C_btheta), rigid belt"
-    schema = _Sidewall.schema_for(15.0, "kN circumferential on the belt")
+    schema = _Sidewall.schema_for(15.0, "kN circumferential on the belt", inertia=True)
     saved_field = ("belt_rot", 1)
     k_name, c_name, c_unit, x_name = "k_btheta_Nm_per_rad", "C_btheta", "Nms_per_rad", "theta_ss_rad"
     mass_name = "decay_inertia_kgm2"
-    own_key, ref_key = "belt_Iy_kgm2", "belt_Iy_kgm2"
+    own_key = "belt_Iy_kgm2"
     traced_names = ("k_btheta_Nm_per_rad", "theta_ss_rad")
+    quantity_names = _Sidewall.names_for(k_name, x_name, "moment_Nm", mass_name, c_name, c_unit)
 
     def load6(self, r):
         return jnp.zeros(6).at[4].set(self.force * r)
@@ -197,8 +224,9 @@ class SidewallTranslation(_Sidewall):
     saved_field = ("belt_disp", 1)
     k_name, c_name, c_unit, x_name = "k_by_N_per_m", "C_by", "Ns_per_m", "y_ss_m"
     mass_name = "decay_mass_kg"
-    own_key, ref_key = "belt_kg", "belt_kg"
+    own_key = "belt_kg"  # the model's belt mass is the tire file's [mass] belt_kg (the mesh is built to it)
     traced_names = ("k_by_N_per_m", "y_ss_m")
+    quantity_names = _Sidewall.names_for(k_name, x_name, "load_N", mass_name, c_name, c_unit)
 
     def load6(self, r):
         return jnp.zeros(6).at[1].set(2 * self.force)
@@ -209,12 +237,13 @@ class SidewallCamber(_Sidewall):
     name = "sidewall_camber"
     study_id = "E08"
     description = "E08 sidewall camber-wise stiffness and damping (k_bgamma, C_bgamma), rigid belt"
-    schema = _Sidewall.schema_for(5.0, "kN at each of top and bottom (opposite directions)")
+    schema = _Sidewall.schema_for(5.0, "kN at each of top and bottom (opposite directions)", inertia=True)
     saved_field = ("belt_rot", 0)
     k_name, c_name, c_unit, x_name = "k_bgamma_Nm_per_rad", "C_bgamma", "Nms_per_rad", "gamma_ss_rad"
     mass_name = "decay_inertia_kgm2"
-    own_key, ref_key = "belt_Ix_kgm2", "belt_Ix_kgm2"
+    own_key = "belt_Ix_kgm2"
     traced_names = ("k_bgamma_Nm_per_rad", "gamma_ss_rad")
+    quantity_names = _Sidewall.names_for(k_name, x_name, "moment_Nm", mass_name, c_name, c_unit)
 
     def load6(self, r):
         return jnp.zeros(6).at[3].set(2 * self.force * r)
