@@ -3,9 +3,13 @@ three grid conditions of a finished characterization.
 
 Shell side: the drop test (E04), the drum-cleat (E03) and the lateral release (E09 with its decay)
 are read from the characterization's own case folders; the slip-angle step at 5 and 15 m/s is run here
-(`experiments.slip_step`, one batch for every condition and speed). Ring side: `rigid_ring.params.derive`
-populates the ring from the same condition's table row and `rigid_ring.scenarios` runs the same inputs.
-`rigid_ring.validation.compare` judges every metric against its tolerance (stated up front there).
+(`experiments.slip_step`), each condition saved the moment it finishes into DIR/validation/cases/<case>/
+(signals.csv, then result.json; error.txt for a failure), with DIR/validation/settings.json: a rerun
+runs only what is missing or failed, and refuses a folder made with other settings. A failed step is
+no silent gap: its rows say "SHELL RUN FAILED" and the error is returned. Ring side:
+`rigid_ring.params.derive` populates the ring from the same condition's table row and
+`rigid_ring.scenarios` runs the same inputs. `rigid_ring.validation.compare` judges every metric
+against its tolerance (stated up front there).
 """
 
 import csv
@@ -111,32 +115,78 @@ def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ) -> dict:
     return out
 
 
-def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None):
-    """Compare ring and shell at `conditions` ((kg, psi) pairs of the grid). Returns a list of
-    (condition dict, comparison rows, shell signals, ring signals)."""
+def slip_steps(char_dir, plan, conds, slip_step_table=None, batch_size=1, on_case=None) -> list:
+    """The slip-angle step at each condition (SI dicts), resumed from DIR/validation. Returns one entry
+    per condition: its ExperimentResult (read back from its folder) or its error message (str).
+    on_case(name or None, n_done, n_total): at the start (None) and as each condition is saved (the
+    CLI draws a progress bar with it)."""
     from . import batch
+    from .characterize import case_name
     from .config import validate_table
     from .experiments import REGISTRY
     from .experiments.phases import Protocol
+    from .fingerprint import claim_folder, code_version
+    from .io import atomic_write_text, check_writable
+    from .tire import make_tire
+
+    exp = REGISTRY["slip_step"].from_table(validate_table(slip_step_table or {}, REGISTRY["slip_step"].schema,
+                                                          "slip_step"), Protocol.from_dict(plan.solver), plan.tire)
+    folder = check_writable(Path(char_dir) / "validation")
+    claim_folder(folder, {"slip_step": exp, "tire": plan.tire, "solver": plan.solver, "conditions": conds,
+                          "jtire": code_version()})
+    names = [case_name(i, c) for i, c in enumerate(conds)]
+    todo = [i for i, n in enumerate(names) if not (folder / "cases" / n / "result.json").exists()]
+    done = [len(conds) - len(todo)]
+    if on_case is not None:
+        on_case(None, done[0], len(conds))
+
+    def save(k, res):
+        case = folder / "cases" / names[todo[k]]
+        if isinstance(res, batch.CaseFailure):
+            atomic_write_text(case / "error.txt", f"{res.error}\n")
+        else:
+            res.write(case)
+            (case / "error.txt").unlink(missing_ok=True)
+        done[0] += 1
+        if on_case is not None:
+            on_case(names[todo[k]], done[0], len(conds))
+
+    if todo:
+        batch.run(exp, make_tire(plan.tire), [conds[i] for i in todo], batch=batch_size, on_result=save)
+    return [_read_case(folder / "cases" / n) for n in names]
+
+
+def _read_case(folder):
+    from .experiments.result import ExperimentResult
+
+    if (folder / "result.json").exists():
+        d = json.loads((folder / "result.json").read_text())
+        return ExperimentResult(d["experiment"], d["condition"], d["quantities"], signals=_signals(folder),
+                                checks=d["checks"], info=d["info"])
+    err = folder / "error.txt"
+    return err.read_text().strip() if err.exists() else "not run"
+
+
+def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None, on_case=None):
+    """Compare ring and shell at `conditions` ((kg, psi) pairs of the grid). Returns a list of
+    (condition dict, comparison rows, shell signals, ring signals, error of the slip step or None)."""
     from .rigid_ring import validation
     from .rigid_ring.table import read_characterization
-    from .tire import make_tire
 
     char = read_characterization(char_dir)
     conds = [{"load_N": kg * U.G0, "pressure_Pa": psi * U.PSI} for kg, psi in conditions]
-    exp = REGISTRY["slip_step"].from_table(validate_table(slip_step_table or {}, REGISTRY["slip_step"].schema,
-                                                          "slip_step"), Protocol.from_dict(plan.solver), plan.tire)
-    steps = batch.run(exp, make_tire(plan.tire), conds)
+    steps = slip_steps(char_dir, plan, conds, slip_step_table, on_case=on_case)
     out = []
     for c, st in zip(conds, steps):
         row = char.row(c["load_N"], c["pressure_Pa"])
         shell, s_sig = shell_metrics(char_dir, c["load_N"], c["pressure_Pa"])
-        if not isinstance(st, batch.CaseFailure):
+        error = st if isinstance(st, str) else None
+        if error is None:
             m, sg = step_metrics(st)
             shell |= m
             s_sig |= sg
         band = s_sig.pop("drop_band_Hz", None) or BELT_BAND_HZ
         rr = ring_results(row, char.tire, band) if row is not None else {}
-        rows = validation.compare(shell, validation.ring_metrics(rr))
-        out.append((c, rows, s_sig, validation.ring_signals(rr)))
+        rows = validation.compare(shell, validation.ring_metrics(rr), failed=("step_",) if error else ())
+        out.append((c, rows, s_sig, validation.ring_signals(rr), error))
     return out

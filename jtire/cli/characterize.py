@@ -61,7 +61,9 @@ def run_cli(args, say) -> int:
     for line in lines:
         say(line)
     if not args.no_validate:
-        written += _validate(plan, out, say)
+        shown, failed = _validate(plan, out, say)
+        written += shown
+        failures += failed
     say(f"wrote {out / 'characterization.json'}, {', '.join(p.name for p in written)} in {out} "
         f"({walls['total_s']:.0f} s)")
     if failures:
@@ -69,8 +71,11 @@ def run_cli(args, say) -> int:
     return 0
 
 
-def _validate(plan, out, say) -> list:
-    """The rigid ring against the shell model at three grid conditions: table and figure."""
+def _validate(plan, out, say) -> tuple:
+    """The rigid ring against the shell model at three grid conditions: table and figure. Returns
+    (files written, failed shell runs as "validation/<condition>: error" lines)."""
+    from tqdm import tqdm
+
     from .. import units as U
     from ..io import atomic_write_text
     from ..rigid_ring import validation
@@ -81,12 +86,27 @@ def _validate(plan, out, say) -> list:
     from ..rigid_ring.diagnosis import diagnose
     from ..rigid_ring.table import read_characterization
 
-    res = validate(out, plan, conds)
+    bars = []
+
+    def progress(name, n_done, n_total):  # one step per condition: its slip steps at both speeds
+        if not bars:
+            bars.append(tqdm(total=n_total, initial=n_done, desc="validation slip steps", unit="case"))
+        else:
+            bars[0].update(n_done - bars[0].n)
+
+    try:
+        res = validate(out, plan, conds, on_case=progress)
+    finally:
+        for bar in bars:
+            bar.close()
     char = read_characterization(out)
-    text, written = ["## Rigid ring vs shell model\n"], []
-    for c, rows, s_sig, r_sig in res:
+    text, written, failed = ["## Rigid ring vs shell model\n"], [], []
+    for c, rows, s_sig, r_sig, error in res:
         kg, psi = c["load_N"] / U.G0, c["pressure_Pa"] / U.PSI
         text += [f"### {kg:g} kg, {psi:g} psi\n", validation.markdown(rows)]
+        if error is not None:
+            failed.append(f"validation slip step at {kg:g} kg, {psi:g} psi: {error}")
+            text.append(f"The shell model's slip step failed here ({error}); rerun the command to retry it.\n")
         notes = diagnose(char, c["load_N"], c["pressure_Pa"], rows, char_dir=out, shell_signals=s_sig)
         if notes:
             text += ["Causes of the disagreements beyond tolerance:\n", "\n".join(notes) + "\n"]
@@ -94,4 +114,4 @@ def _validate(plan, out, say) -> list:
                                                     title=f"Rigid ring vs shell model, {kg:g} kg, {psi:g} psi"))
     written.append(atomic_write_text(out / "validation.md", "\n".join(text)))
     say("\n".join(text))
-    return [p for p in written if p is not None]
+    return [p for p in written if p is not None], failed

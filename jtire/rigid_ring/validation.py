@@ -82,7 +82,7 @@ class Comparison:
     ring: float | None
     rel_diff: float | None  # ring / shell - 1
     tolerance: float | None
-    verdict: str  # "pass", "FAIL", "not compared"
+    verdict: str  # "pass", "FAIL", "not compared", "SHELL RUN FAILED"
     meaning: str
 
 
@@ -90,15 +90,18 @@ def _num(v):
     return None if v is None or not math.isfinite(float(v)) else float(v)
 
 
-def compare(shell_results: dict, ring_results: dict) -> list:
-    """Comparison rows for every metric of METRICS (plus unknown names, listed not judged)."""
+def compare(shell_results: dict, ring_results: dict, failed=()) -> list:
+    """Comparison rows for every metric of METRICS (plus unknown names, listed not judged). failed:
+    name prefixes of metrics whose shell run failed (their verdict says so, not "not compared")."""
     rows = []
     names = list(BY_NAME) + [n for n in list(shell_results) + list(ring_results) if n not in BY_NAME]
     for n in dict.fromkeys(names):
         m = BY_NAME.get(n, Metric(n, None, "(not a validation metric)"))
         s, r = _num(shell_results.get(n)), _num(ring_results.get(n))
         rel = None if s is None or r is None or s == 0 else r / s - 1
-        if rel is None or m.tolerance is None:
+        if s is None and n.startswith(tuple(failed)):
+            verdict = "SHELL RUN FAILED"
+        elif rel is None or m.tolerance is None:
             verdict = "not compared"
         else:
             verdict = "pass" if abs(rel) <= m.tolerance else "FAIL"

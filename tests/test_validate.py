@@ -1,0 +1,141 @@
+"""The rigid-ring validation's shell runs (`jtire.validate`): the slip-angle step at each condition is
+saved as it finishes (DIR/validation), a resume runs only what is missing or failed, a folder made with
+other settings refuses, progress is reported per condition, and a failed step is an error and a visible
+"SHELL RUN FAILED" row, never a silent "not compared".
+
+Fast: the folder machinery, with the shell simulator replaced by a stand-in that returns made-up steps
+and the ring's scenarios (~20 s per condition, tested in test_rigid_ring_*.py) left out: the rows hold
+the shell's numbers only. Slow: one real slip step on the coarse ring, whose quantities are the ones the
+experiment declares.
+"""
+
+import numpy as np
+import pytest
+
+from jtire import batch
+from jtire.errors import ConfigError, SimulationError
+from jtire.experiments import REGISTRY
+from jtire.experiments.result import ExperimentResult
+from jtire.rigid_ring import synthetic
+from jtire.rigid_ring.table import write_characterization
+from jtire.validate import DEFAULT_CONDITIONS, validate
+
+from .conftest import REPO
+
+CHAR = REPO / "configs" / "characterize.toml"
+STEP_TABLE = {"speeds_m_per_s": [5.0, 15.0]}
+
+
+def _step(condition) -> ExperimentResult:
+    """A made-up slip step result with every quantity the experiment writes (a first-order build-up)."""
+    s = np.linspace(0.0, 3.0, 50)
+    q = {n: 1.0 for n in REGISTRY["slip_step"].quantity_names}
+    sig = {}
+    for v in (5, 15):
+        q |= {f"F_y_steady_SAE_N_{v}": -3000.0, f"M_z_steady_SAE_Nm_{v}": 120.0, f"s63_m_{v}": 0.4}
+        sig |= {f"distance_m_{v}": s, f"F_y_SAE_N_{v}": -3000.0 * (1 - np.exp(-s / 0.4)), f"M_z_SAE_Nm_{v}": 0 * s}
+    return ExperimentResult("slip_step", dict(condition), q, signals=sig)
+
+
+@pytest.fixture
+def plan_and_folder(tmp_path):
+    from jtire.characterize import load_plan
+
+    write_characterization(tmp_path, synthetic.characterization())
+    return load_plan(CHAR), tmp_path
+
+
+def fake_runs(monkeypatch, fail_loads_kg=()):
+    """batch.run replaced: conditions at the given loads fail; returns the list of conditions run."""
+    ran = []
+
+    def run(exp, tire, conditions, *a, on_result=None, **kw):
+        out = []
+        for i, c in enumerate(conditions):
+            ran.append(c)
+            fail = any(abs(c["load_N"] - kg * 9.81) < 1e-6 for kg in fail_loads_kg)
+            r = batch.CaseFailure(c, SimulationError("slip step: blew up at 0.12 s")) if fail else _step(c)
+            on_result(i, r)
+            out.append(r)
+        return out
+
+    monkeypatch.setattr(batch, "run", run)
+    monkeypatch.setattr("jtire.tire.make_tire", lambda spec: None)
+    monkeypatch.setattr("jtire.validate.ring_results", lambda *a: {})
+    return ran
+
+
+def test_failed_step_is_a_visible_row_saved_and_retried_on_resume(plan_and_folder, monkeypatch):
+    plan, folder = plan_and_folder
+    ran = fake_runs(monkeypatch, fail_loads_kg=[2312.5])
+    seen = []
+    res = validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE, on_case=lambda *a: seen.append(a))
+    assert len(ran) == 3 and [a[1:] for a in seen] == [(0, 3), (1, 3), (2, 3), (3, 3)]  # a step per condition
+    by_load = {round(c["load_N"] / 9.81, 3): (rows, err) for c, rows, _, _, err in res}
+    rows, err = by_load[2312.5]
+    assert "blew up at 0.12 s" in err
+    steps = [r for r in rows if r.metric.startswith("step_")]
+    assert len(steps) == 6 and all(r.verdict == "SHELL RUN FAILED" for r in steps)
+    rows, err = by_load[4625.0]
+    steps = [r for r in rows if r.metric.startswith("step_")]
+    assert err is None and all(r.shell is not None and r.verdict == "not compared" for r in steps)  # no ring here
+    cases = sorted((folder / "validation" / "cases").iterdir())
+    assert [bool(list(c.glob("error.txt"))) for c in cases] == [False, True, False]
+    assert all((c / "signals.csv").is_file() == (c / "result.json").is_file() for c in cases)
+    # the resume runs the failed condition only; the others are read back (signals too)
+    ran = fake_runs(monkeypatch)
+    seen.clear()
+    res = validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE, on_case=lambda *a: seen.append(a))
+    assert [round(c["load_N"] / 9.81, 3) for c in ran] == [2312.5]
+    assert seen[0][1:] == (2, 3) and seen[-1][1:] == (3, 3) and len(seen) == 2
+    assert all(err is None for *_, err in res)
+    assert not list((folder / "validation" / "cases").glob("*/error.txt"))
+    for _, rows, s_sig, _, _ in res:
+        assert "step_5" in s_sig and not any(r.verdict == "SHELL RUN FAILED" for r in rows)
+
+
+def test_resume_runs_nothing_finished_and_other_settings_refuse(plan_and_folder, monkeypatch):
+    plan, folder = plan_and_folder
+    fake_runs(monkeypatch)
+    validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
+    ran = fake_runs(monkeypatch)
+    validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
+    assert ran == []
+    with pytest.raises(ConfigError, match="holds results made with other settings.*slip_step"):
+        validate(folder, plan, DEFAULT_CONDITIONS, {"speeds_m_per_s": [5.0, 15.0], "distance_m": 2.0})
+    with pytest.raises(ConfigError, match="holds results made with other settings.*conditions"):
+        validate(folder, plan, DEFAULT_CONDITIONS[:2], STEP_TABLE)
+    assert ran == []
+
+
+def test_characterize_reports_a_failed_step_as_an_error(plan_and_folder, monkeypatch, capsys):
+    """The command's validation: the failure is listed for the final error line (exit 2) and written
+    under its condition in validation.md; the progress bar moves per condition (stderr)."""
+    from jtire.cli.characterize import _validate
+
+    plan, folder = plan_and_folder
+    fake_runs(monkeypatch, fail_loads_kg=[4625.0])
+    monkeypatch.setattr("jtire.rigid_ring.diagnosis.diagnose", lambda *a, **k: [])
+    monkeypatch.setattr("jtire.rigid_ring.validation.validation_figure", lambda *a, **k: None)
+    lines = []
+    written, failed = _validate(plan, folder, lambda s, err=False: lines.append(s))
+    assert len(failed) == 2 and all("blew up at 0.12 s" in f for f in failed)  # rated and soft: 4625 kg
+    md = (folder / "validation.md").read_text()
+    assert md.count("SHELL RUN FAILED") == 12 and md.count("rerun the command to retry it") == 2
+    assert "validation slip steps" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_real_slip_step_writes_its_declared_quantities(spec, protocol, coarse_tire):
+    """One slip step at 5 m/s on the coarse ring (about a minute here): a finite steady F_y of the SAE
+    sign for a positive slip angle, and the quantities the experiment declares, no more, no fewer."""
+    from jtire.config import validate_table
+
+    from .conftest import RATED, make_experiment, ok
+
+    table = {"speeds_m_per_s": [5.0], "distance_m": 1.0}
+    exp = make_experiment("slip_step", protocol, spec, **table)
+    (r,) = batch.run(exp, coarse_tire, [RATED])
+    r = ok(r)
+    assert set(r.quantities) == set(REGISTRY["slip_step"].produces(validate_table(table, exp.schema, "slip_step")))
+    assert np.isfinite(r.quantities["F_y_steady_SAE_N_5"]) and r.quantities["F_y_steady_SAE_N_5"] < 0
