@@ -15,6 +15,7 @@ one per core at import (`JTIRE_CPU_DEVICES` overrides). On a GPU it runs unchang
 `jax.devices()`. Several hosts (`jax.distributed`) are not supported: see the README.
 """
 
+import contextlib
 import dataclasses
 import time
 
@@ -114,12 +115,13 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     CaseFailure, in order.
 
     params_list: None (the tire's parameters for every condition) or one MaterialParams per
-    condition. batch: cases per batch (0: all at once). on_result(i, result_or_failure) is called
-    as soon as condition i is reduced; on_batch(n_conditions_done, n_total, wall_s) after every batch.
-    keep_outputs: attach the raw per-case outputs (numpy) as result.outputs (for traced checks).
-    device: run a static experiment's cases on this one device (a caller running several static
-    experiments at once gives each its own); None: with several devices and several cases, its cases
-    run side by side, one per device at a time. Transients always take every device.
+    condition. batch: cases per batch (0: all at once; 1: case by case, each saved the moment it is
+    done). on_result(i, result_or_failure) is called as soon as condition i is reduced;
+    on_batch(n_conditions_done, n_total, wall_s) after every batch. keep_outputs: attach the raw
+    per-case outputs (numpy) as result.outputs (for traced checks). device: run a static experiment's
+    cases on this one device (a caller running several static experiments at once gives each its own);
+    None: with several devices and batches of one case (statics always, transients with batch = 1),
+    the cases run side by side, one per device at a time. Larger transient batches take every device.
     """
     if hasattr(exp, "components"):  # a composite (E11): its components' results combined per condition
         subs = [run(c, tire, conditions, params_list, devices=devices, batch=batch, keep_outputs=keep_outputs)
@@ -147,7 +149,7 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     size = len(flat) if batch <= 0 else min(batch, len(flat))
     if not exp.shardable:  # static solves run case by case anyway: each case is its own batch, so it is
         size = 1  # reduced and handed to on_result (saved) the moment it finishes
-    n_dev = n_devices_for(size, devices) if exp.shardable else 1
+    n_dev = n_devices_for(size, devices) if exp.shardable and size > 1 else 1
     size = -(-size // n_dev) * n_dev  # a multiple of the device count
     starts = list(range(0, len(flat), size))
 
@@ -159,7 +161,11 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
         params = shard(_stack([plist[flat[k][0]] for k in padded]), n_dev, dev0) if params_batched else plist[0]
         t0 = time.perf_counter()
         if exp.shardable:
-            outs = jax.device_get(simulate_batch(exp, model, params, shard(cases, n_dev), params_batched=params_batched))
+            # on another device than the first, what the plan creates between phases goes there too (the
+            # context is part of a trace's key: device 0 keeps the programs traced without it)
+            with jax.default_device(jax.devices()[dev0]) if dev0 else contextlib.nullcontext():
+                outs = jax.device_get(simulate_batch(exp, model, params, shard(cases, n_dev, dev0),
+                                                     params_batched=params_batched))
         else:
             outs = _case_by_case(exp, model, params, shard(cases, 1, dev0), params_batched, dev0)
         return chunk, outs, time.perf_counter() - t0
@@ -184,14 +190,14 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
             on_batch(done, len(conditions), wall)
 
     avail = len(jax.devices()) if devices is None else int(devices)
-    if exp.shardable or device is not None or avail < 2 or len(starts) < 2:
+    if n_dev > 1 or device is not None or avail < 2 or len(starts) < 2:
         for start in starts:
-            collect(*run_chunk(start, 0 if exp.shardable else int(device or 0)))
+            collect(*run_chunk(start, int(device or 0)))
         return results
-    # Static solves, several cases, several devices: the cases run side by side, one per device at a
-    # time (threads; JAX releases the GIL while a program runs), and are reduced and handed to
-    # on_result here, in this thread, as each finishes. Measured on the default mesh, 2 cores: E02 and
-    # E09 at one condition each, 3.3 + 3.2 s one after the other, 5.0 s side by side.
+    # Batches of one case (static solves always), several of them, several devices: the cases run side
+    # by side, one per device at a time (threads; JAX releases the GIL while a program runs), and are
+    # reduced and handed to on_result here, in this thread, as each finishes. Measured on the default
+    # mesh, 2 cores: E02 and E09 at one condition each, 3.3 + 3.2 s one after the other, 5.0 s side by side.
     import queue
     from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 

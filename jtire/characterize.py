@@ -114,7 +114,7 @@ def settings(plan: Plan) -> dict:
             "solver": plan.solver, "rated": plan.rated, "jtire": code_version()}
 
 
-def run(plan: Plan, out, batch_size: int = 0, progress=None, on_case=None) -> dict:
+def run(plan: Plan, out, batch_size: int = 1, progress=None, on_case=None) -> dict:
     """Run every experiment of the plan into `out` (resuming). Returns {experiment: [result dicts or
     None (failed), one per condition]}. progress: a callable(n_done_increment) or None; on_case(name,
     condition, error_or_None) after every case."""

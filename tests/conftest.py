@@ -6,10 +6,12 @@ few as it can and runs every simulation through the `runs` factory, which caches
 whole session (test files share them). The fast suite uses:
     one tire (`coarse_tire`: 32 segments, 4 crown elements) and ONE solver protocol (`protocol`);
     flat-road program, 1 case on 1 device   ("singles": E01, E02, E04, E09, E12, custom plans, CLI runs);
-    flat-road program, 4 cases on 2 devices ("grids": the E01 grid, the E10 sweep, `jtire sweep`);
+    the same on the second device           (grids case by case, side by side: `jtire sweep`'s default);
+    flat-road program, 4 cases on 2 devices ("grids": the E01 grid, the E10 sweep);
     flat-road program, 4 cases on 1 device  (the unsharded E01 grid: sharded = unsharded);
-    rigid-belt program, 1 case on 1 device  (E05, E07, E08).
-Anything else (the default mesh, the drum of E03) is under @pytest.mark.slow.
+    rigid-belt program, 1 case on 1 device  (E05, E07, E08);
+    drum program, 1 case on 1 device        (E03, once).
+Anything else (the default mesh, other drum runs) is under @pytest.mark.slow.
 
 Persistent compilation cache: ON, in the default folder (`jtire.cache`: $JTIRE_CACHE_DIR if set, else
 the user's cache folder; JTIRE_CACHE_DIR=off turns it off). The command-line tests and the

@@ -1,9 +1,9 @@
 """`jtire sweep`: a sweep killed mid-way resumes without recomputing what it finished; a folder made
 with other settings refuses in one line; case folder names cannot collide.
 
-The killed sweep runs in a subprocess (the real command, SIGKILLed): 4 cases of E01 on the coarse ring
-in batches of one (`--batch 1`: one case on one device, the program the in-process single runs
-compiled, loaded from the persistent cache instead of compiled again).
+The killed sweep runs in a subprocess (the real command, SIGKILLed): 4 cases of E01 (transient) on the
+coarse ring with the default batching: case by case, side by side on the devices, each saved as it
+finishes (the one-case program the in-process runs compiled, loaded from the persistent cache).
 """
 
 import json
@@ -25,7 +25,7 @@ from .conftest import COARSE_SET, REPO, SOLVER_SET
 
 FOOTPRINT = REPO / "configs" / "experiments" / "footprint.toml"
 ARGS = [str(FOOTPRINT), *[a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)],
-        "--set", "sweep.loads_kg=[2312.5, 4625.0]", "--set", "sweep.pressures_psi=[120.0, 150.0]", "--batch", "1",
+        "--set", "sweep.loads_kg=[2312.5, 4625.0]", "--set", "sweep.pressures_psi=[120.0, 150.0]",
         # the transient method: the single-case program the in-process tests compiled (this file tests
         # the folder machinery, not the method)
         "--set", "footprint.method=transient"]

@@ -13,7 +13,9 @@ def add_arguments(p):
     p.add_argument("--out", default="runs/characterize", help="output folder (resumes a run with the same settings)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                    help="override a field, e.g. grid.pressures_psi=[120] or tire.mesh.n_theta=48")
-    p.add_argument("--batch", type=int, default=0, help="cases per batch (default 0: an experiment's whole grid)")
+    p.add_argument("--batch", type=int, default=1, help="cases per batch (default 1: case by case, side by side over "
+                                                        "the devices, each saved as it finishes; 0: an experiment's "
+                                                        "whole grid at once)")
     p.add_argument("--no-validate", action="store_true",
                    help="skip the rigid-ring validation against the shell model (drop, drum-cleat, lateral release, "
                         "slip step at three grid conditions)")
@@ -31,7 +33,8 @@ def run_cli(args, say) -> int:
     from ..rigid_ring.table import write_characterization
 
     if args.batch < 0:
-        raise ConfigError(f"--batch {args.batch}: must be >= 0 (0: an experiment's whole grid in one batch)")
+        raise ConfigError(f"--batch {args.batch}: must be >= 0 (1: case by case, 0: an experiment's whole grid in one "
+                          f"batch)")
     plan = ch.load_plan(args.config or config_path("characterize.toml"), args.tire, args.overrides)
     out = Path(args.out)
     total, done = ch.total_cases(plan, out if out.exists() else None)

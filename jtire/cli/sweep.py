@@ -2,8 +2,10 @@
 
 The grid comes from the config's [sweep] table (loads in kg, pressures in psi) or defaults to the
 study's 3 x 3 grid (experiments where the load does not enter, E05/E07/E08, run once per pressure).
-All cases run through the batch runner (`jtire.batch`: vmapped, sharded over the devices) in
-batches of --batch cases (default: the whole grid). Every finished case is written to
+All cases run through the batch runner (`jtire.batch`) in batches of --batch cases: by default one,
+each case on its own and the cases side by side, one per device, so each is saved (and counted by the
+progress bar) the moment it finishes and a kill loses at most the cases in flight; a larger batch is
+vmapped and sharded over the devices (0: the whole grid). Every finished case is written to
 DIR/cases/<case>/result.json at once; DIR/settings.json holds everything that determines the numbers,
 so a rerun into DIR resumes (finished cases are not recomputed) only with the same settings and
 refuses otherwise. DIR/summary.csv gathers every case's quantities.
@@ -47,7 +49,8 @@ def add_arguments(p):
     p.add_argument("config", help="experiment config TOML (its [sweep] table sets the grid)")
     p.add_argument("--out", default="runs/sweep", help="output folder (resumes if it holds finished cases of the same settings)")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
-    p.add_argument("--batch", type=int, default=0, help="cases per batch (default 0: the whole grid at once)")
+    p.add_argument("--batch", type=int, default=1, help="cases per batch (default 1: case by case, side by side over "
+                                                        "the devices, each saved as it finishes; 0: the whole grid at once)")
 
 
 def settings(rc, exp, conditions) -> dict:
@@ -70,7 +73,7 @@ def run_cli(args, say) -> int:
         raise ConfigError("sweep: the config must name exactly one experiment")
     exp = rc.experiments[0]
     if args.batch < 0:
-        raise ConfigError(f"--batch {args.batch}: must be >= 0 (0: the whole grid in one batch)")
+        raise ConfigError(f"--batch {args.batch}: must be >= 0 (1: case by case, 0: the whole grid in one batch)")
     conditions = grid_conditions(rc.sweep, exp.per_pressure)
     for c in conditions:
         if hasattr(exp, "check_condition"):
