@@ -216,6 +216,17 @@ def e10(runs, e01_grid):
     return runs("cornering", [RATED], devices=2, **E10_TABLE)
 
 
+# E03 on a near-flat drum (20 m) at 30 km/h, 0.2 s of record: the linear vertical belt mode of the tire
+# on the flat road (tests/test_drum_cleat.py) is the mode it excites. Its own program (drum surfaces):
+# ~35 s to compile here, 7 s to run.
+E03_TABLE = dict(drum_diameter_m=20.0, speed_kmh=30.0, roll_settle_s=0.05, record_s=0.2)
+
+
+@pytest.fixture(scope="session")
+def e03(runs):
+    return runs("drum_cleat", [RATED], **E03_TABLE)
+
+
 SIDEWALL = ("inplane_rotation", "sidewall_translation", "sidewall_camber")
 SIDEWALL_DECAY = {"decay_s": 0.1}  # ~3 periods of the 25-37 Hz belt modes: two peaks and the fit
 P_LOW = 80 * U.PSI
