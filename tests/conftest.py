@@ -130,6 +130,19 @@ def runs(spec, coarse_tire, protocol):
     return Runs(spec, coarse_tire, protocol)
 
 
+def contact_patch(tire, run):
+    """(x (m), k_t (N/m)) of the tread points in contact at the end of a static run (E01's state), for
+    the brush-model bounds of the tests: positions along the road and tread shear stiffnesses."""
+    import numpy as np
+
+    out = ok(run.results[0]).outputs[0]
+    m, y = tire.model, out["y"]
+    P = m.tread_points(m.assemble(y.x, y.q))
+    inside = np.asarray(P.z) < float(out["z_road"])
+    _, k_t, _ = m.contact_stiffness(tire.params)
+    return np.asarray(P.x)[inside], np.asarray(k_t)[inside]
+
+
 def ok(result):
     """The ExperimentResult, or fail the test with the simulation's own message."""
     from jtire.batch import CaseFailure

@@ -147,12 +147,20 @@ def test_lateral_release_decay(e09, spec):
     assert abs(c["release_final_level_minus_preload_m"]) < TOL_RETURN * q["lateral_deflection_m"]
 
 
-def test_lateral_static_part(e09):
+def test_lateral_static_part(e09, sidewall_runs, e01_static, coarse_tire):
+    """k_l below the rigid ring's series of its two springs taken at their stiffest: the sidewalls
+    between rim and a rigid belt (E07's k_by, same pressure) and the patch's tread shear under a rigid
+    belt (sum of k_t over the points in contact, E01's state): 1 / k_l >= 1 / k_by + 1 / sum k_t. The
+    belt's lateral bending and twist only add compliance (measured k_l = 0.50 of the bound). (It was
+    a factor-2 band around the study's 450 kN/m, a calibration target the uncalibrated tire need not
+    meet; the static solve pins k_l to 1 %, tests/test_static.py.)"""
+    from .conftest import contact_patch
+
     res = ok(e09.results[0])
     q, c = res.quantities, res.checks
     assert c["inflate_settled"] and c["load_settled"] and c["lateral_settled"]
     # the road carries the lateral force (1 %: the equilibrium tolerance every settled phase meets)
     assert c["contact_vs_lateral_rel_error"] < 0.01
-    # the study's 450 kN/m (11.1 mm under 5 kN) is a calibration target: the uncalibrated tire reads
-    # ~730 kN/m (coarse and default mesh alike), so a credible band only: within a factor 2
-    assert 450.46e3 / 2 < q["k_l_N_per_m"] < 450.46e3 * 2
+    k_by = ok(sidewall_runs["sidewall_translation"][P].results[0]).quantities["k_by_N_per_m"]
+    k_tread = float(contact_patch(coarse_tire, e01_static)[1].sum())
+    assert 0 < q["k_l_N_per_m"] < 1 / (1 / k_by + 1 / k_tread)

@@ -16,6 +16,7 @@ import re
 import shlex
 import sys
 
+import numpy as np
 import pytest
 
 from jtire.cli import main
@@ -145,7 +146,11 @@ def test_run_footprint_out(user_dir, capsys, e01_grid, e01_static):
 
 
 def test_run_set_condition(user_dir, capsys, e01_grid):
-    """E02 at 70 psi, with --out: result.json and signals.csv (was tests/test_cli_static.py)."""
+    """E02 at 70 psi, with --out: result.json and signals.csv (was tests/test_cli_static.py). Its static
+    curve at the rated load deflects as the suite's settled transient E01 at 70 psi and that load does,
+    a little more (long-term moduli: the transient's Maxwell branches are not quite relaxed when it
+    settles), by under 3 % (tests/test_static.py's static-vs-transient reason; measured 0.46 %). It
+    replaces a 6x band on k_sv."""
     cmd = "jtire run configs/experiments/vertical_stiffness.toml --set condition.pressure_psi=70"
     assert jtire(cmd, *QUICK_SIM, "--out", "runs/e02") == 0
     printed = capsys.readouterr().out
@@ -156,13 +161,17 @@ def test_run_set_condition(user_dir, capsys, e01_grid):
     assert set(d["condition"]) == {"pressure_Pa", "load_N"}
     assert d["condition"]["pressure_Pa"] == pytest.approx(70 * 6894.757293168)
     q = d["quantities"]
-    assert 5e5 < q["k_sv_N_per_m"] < 3e6 and 0.01 < q["deflection_m"] < 0.08
     assert q["stated_load_N"] == pytest.approx(50e3)  # the config's stated load
     assert d["checks"]["static_converged"] and d["checks"]["contact_vs_load_max_rel_error"] < 1e-5
     rows = list(csv.DictReader((out / "signals.csv").open()))
     assert {"load_N", "deflection_m", "contact_force_N"} <= set(rows[0])
     loads = [float(r["load_N"]) for r in rows]
     assert loads == sorted(loads) and loads[-1] == pytest.approx(60e3)
+    transient = ok(e01_grid.results[3])  # 70 psi, 4625 kg
+    assert transient.condition["pressure_Pa"] == d["condition"]["pressure_Pa"]
+    d_static = float(np.interp(transient.condition["load_N"], loads, [float(r["deflection_m"]) for r in rows]))
+    d_transient = transient.quantities["deflection_m"]
+    assert d_transient < d_static < 1.03 * d_transient, (d_static, d_transient)
 
 
 def test_run_set_tire_mesh(user_dir, capsys, e01_grid):

@@ -42,11 +42,19 @@ def test_footprint_grows_with_load_and_shortens_with_pressure(e01_grid):
     assert rated["contact_length_m"] < 0.95 * low_p["contact_length_m"]
 
 
-def test_vertical_stiffness_rises_with_pressure(e01_grid):
+# Two paths to one equilibrium: the rated load ramped on and settled (E01), and the tire dropped 20 mm
+# with the load on, bouncing and coming to rest (E04). Each is settled to its own force balance (1 %
+# and 2 % of the load, TOL_EQUILIBRIUM of test_drop.py) and friction makes the patch edges path
+# dependent, so their secant stiffnesses agree to the sum, 3 % (measured 0.6 %). It replaces a 40 %
+# band around the study's 1280 kN/m, a calibration target the uncalibrated tire need not meet.
+TOL_TWO_PATHS = 0.03
+
+
+def test_vertical_stiffness_rises_with_pressure(e01_grid, e04):
     _, rated, high_p, low_p = (ok(r).quantities for r in e01_grid.results)
     assert low_p["k_secant_N_per_m"] < rated["k_secant_N_per_m"] < high_p["k_secant_N_per_m"]
-    # and stays within a credible band of the study's 1280 kN/m at rated (coarse mesh: 40 %)
-    assert rated["k_secant_N_per_m"] == pytest.approx(1.28e6, rel=0.4)
+    assert rated["k_secant_N_per_m"] == pytest.approx(ok(e04.results[0]).quantities["k_sv_N_per_m"],
+                                                      rel=TOL_TWO_PATHS)
 
 
 def test_footprint_quantities_consistent(e01_grid, spec):
@@ -62,11 +70,21 @@ def test_footprint_quantities_consistent(e01_grid, spec):
         assert q["k_secant_N_per_m"] == pytest.approx(r.condition["load_N"] / q["deflection_m"], rel=1e-12)
 
 
-def test_vertical_stiffness_ramp(e02):
-    """E02 on the coarse ring with a 0.15 s ramp (was tests/test_cli_static.py, through the CLI)."""
+def glassy_factor(params) -> float:
+    """The most any rate can stiffen the rubber: every generalized stiffness K gains at most
+    loss * sum c_b of it from its Maxwell branches (their instantaneous limit), with the largest loss."""
+    return 1.0 + float(np.max(np.asarray(params.loss))) * float(np.sum(params.prony_weights))
+
+
+def test_vertical_stiffness_ramp(e02, e02_static, coarse_tire):
+    """E02 on the coarse ring with a 0.15 s ramp (was tests/test_cli_static.py, through the CLI). Its
+    secant at the stated load lies between the static solve's (long-term moduli: the branches relaxed)
+    and the static one times the glassy factor (1.53 here: no loading rate stiffens the rubber more):
+    measured 1.105 (it was anywhere in 5e5-3e6 N/m)."""
     r = ok(e02.results[0])
     q, c = r.quantities, r.checks
-    assert 5e5 < q["k_sv_N_per_m"] < 3e6 and 0.01 < q["deflection_m"] < 0.08
+    k_static = ok(e02_static.results[0]).quantities["k_sv_N_per_m"]
+    assert 1.0 < q["k_sv_N_per_m"] / k_static < glassy_factor(coarse_tire.params)
     assert q["stated_load_N"] == LOAD_RATED  # stated_load_kN = 0: the condition's load
     assert c["load_settled"] and c["quasi_static_deflection_rel_error"] < 0.02
     # the fitted slope over 10-60 kN and the secant at the stated load describe one curve: the secant
