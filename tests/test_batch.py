@@ -121,13 +121,14 @@ def test_sharded_equals_unsharded(e01_grid, e01_grid_unsharded):
 def test_case_by_case_side_by_side_is_the_single_runs(coarse_tire, e01_singles):
     """The commands' default (batch = 1): a transient grid's cases run one per batch, side by side on
     the devices (one at a time each), and each is handed over (saved, counted) the moment it finishes.
-    Each case is its single run bit for bit: the same one-case program, only placed on another device."""
+    Each case is its single run bit for bit: the same one-case program, only placed on another device.
+    (Two cases: one on each device.)"""
     assert len(jax.devices()) >= 2
     got = []
-    res = batch.run(e01_singles[0].exp, coarse_tire, GRID, batch=1, devices=2, keep_outputs=True,
+    res = batch.run(e01_singles[0].exp, coarse_tire, GRID[:2], batch=1, devices=2, keep_outputs=True,
                     on_result=lambda i, r: got.append(i))
-    assert sorted(got) == [0, 1, 2, 3]
-    for r, single in zip(res, e01_singles, strict=True):
+    assert sorted(got) == [0, 1]
+    for r, single in zip(res, e01_singles[:2], strict=True):
         s = ok(single.results[0])
         assert ok(r).quantities == s.quantities
         assert max_rel_diff(r.outputs, s.outputs, 1.0)[0] == 0.0
