@@ -65,3 +65,23 @@ def gmres(matvec, psolve, b, rtol, m: int):
     R = jnp.where(used[:, None] & used[None, :], Rm[:m], jnp.eye(m, dtype=b.dtype))
     y = jax.scipy.linalg.solve_triangular(R, jnp.where(used, g[:m], 0.0), lower=False)
     return y @ Z, j, jnp.abs(g[j]) / safe
+
+
+def gmres_restarted(matvec, psolve, b, rtol, m: int, max_restarts: int):
+    """gmres(m) restarted from its last iterate until |matvec(x) - b| <= rtol |b| or max_restarts
+    cycles (static). Returns x."""
+    beta = jnp.linalg.norm(b)
+
+    def cond(c):
+        k, _, res = c
+        return (k < max_restarts) & (res > rtol * beta)
+
+    def body(c):
+        k, x, _ = c
+        r = b - matvec(x)
+        dx, _, _ = gmres(matvec, psolve, r, rtol * beta / jnp.maximum(jnp.linalg.norm(r), 1e-300), m)
+        x = x + dx
+        return k + 1, x, jnp.linalg.norm(b - matvec(x))
+
+    _, x, _ = jax.lax.while_loop(cond, body, (0, jnp.zeros_like(b), jnp.asarray(jnp.inf, b.dtype)))
+    return x

@@ -170,11 +170,27 @@ def jacobian_from_linear(lin, u, st: Structure, symmetric_border: bool = True):
     eye_pad = np.zeros((N, g * B))
     eye_pad[-1, (g - pad) * B:] = 1.0 if pad else 0.0
     D = D + jax.vmap(jnp.diag)(jnp.asarray(eye_pad))
-    padv = lambda a: jnp.concatenate([a, jnp.zeros((pad * B,) + a.shape[1:], a.dtype)]) if pad else a  # noqa: E731
-    Cb = padv(cols[st.n_seeds - nb:, : T * B].T).reshape(N, g * B, nb)
-    Rb = jnp.transpose(padv(rows[:, : T * B].T).reshape(N, g * B, nb), (0, 2, 1))
-    E = rows[:, T * B:]
+    Cb, Rb, E = _border(st, cols[st.n_seeds - nb:], rows)
     return BlockMatrix(D, Up, Lo, Cb, Rb, E)
+
+
+def _border(st: Structure, cols, rows):
+    """Padded border blocks (Cb, Rb, E) from the border's columns and rows, each (nb, n)."""
+    T, B, nb, g, N = st.T, st.B, st.nb, st.g, st.N
+    pad = N * g - T
+    padv = lambda a: jnp.concatenate([a, jnp.zeros((pad * B,) + a.shape[1:], a.dtype)]) if pad else a  # noqa: E731
+    Cb = padv(cols[:, : T * B].T).reshape(N, g * B, nb)
+    Rb = jnp.transpose(padv(rows[:, : T * B].T).reshape(N, g * B, nb), (0, 2, 1))
+    return Cb, Rb, rows[:, T * B:]
+
+
+def with_column(A: BlockMatrix, st: Structure, k: int, col) -> BlockMatrix:
+    """A with its border column k replaced by `col` (n,), e.g. an exact Jacobian column (one product)
+    in an approximate matrix."""
+    T, B, g, N = st.T, st.B, st.g, st.N
+    pad = N * g - T
+    ring = jnp.concatenate([col[: T * B], jnp.zeros(pad * B, col.dtype)]).reshape(N, g * B)
+    return eqx.tree_at(lambda a: (a.Cb, a.E), A, (A.Cb.at[:, :, k].set(ring), A.E.at[:, k].set(col[T * B:])))
 
 
 def add_diagonal(A: BlockMatrix, dx, db):

@@ -116,28 +116,42 @@ def empty_factor(model, setup):
 
 
 def _newton(model, params, setup, u0, P0, P0_valid, opts, factor_at_solution):
-    """The Newton loop. Returns (u, tire_on_rim (6,), info (7,) floats (zero tangents), factor)."""
+    """The Newton loop on the static residual. Returns (u, tire_on_rim (6,), info (7,) floats (zero
+    tangents), factor)."""
     st = LA.structure(model, setup.n_border)
-    fun = lambda u: R.residual(model, params, setup, u)  # noqa: E731
-    fun_rim = lambda u: R.residual_and_rim(model, params, setup, u)  # noqa: E731
-    w = weights(model, setup)
-    scale = load_scale(model, setup)
+    sym = _symmetric_border(setup)
+
+    def factor_of(lin, u, lam, aux):
+        return damped_factor(LA.jacobian_from_linear(lin, u, st, sym), lam)
+
+    return newton_krylov(lambda u: R.residual_and_rim(model, params, setup, u), factor_of, u0, P0, P0_valid,
+                         weights(model, setup), load_scale(model, setup), opts, st, factor_at_solution, exact=True)
+
+
+def damped_factor(A, lam):
+    """Factor of A + lam diag|A| (Marquardt damping; lam = 0: A itself)."""
+    dx, db = LA.diagonal(A)
+    return LA.factor(LA.add_diagonal(A, lam * jnp.abs(dx), lam * jnp.abs(db)))
+
+
+def newton_krylov(fun_rim, factor_of, u0, P0, P0_valid, w, scale, opts, st, factor_at_solution, exact):
+    """Newton-Krylov with a lagged factored preconditioner, a backtracking line search and Marquardt
+    damping (the module docstring). fun_rim(u) -> (residual (n,), aux: any pytree, e.g. the rim force);
+    factor_of(lin, u, lam, aux) -> the Factor preconditioning the linearization `lin` at u (aux: the
+    last accepted iterate's, zeros before the first); exact (static): that factor is the Jacobian
+    itself, so a fresh one gives the Newton step directly, otherwise every step is GMRES.
+    w: (n,) residual weights; scale: the load scale (N). Returns (u, aux, info (7,), factor)."""
+    fun = lambda u: fun_rim(u)[0]  # noqa: E731
     tol = opts.rtol * scale
     rmax = lambda r: jnp.max(jnp.abs(w * r))  # noqa: E731
     merit = lambda r: jnp.sum((w * r) ** 2)  # noqa: E731
-    sym = _symmetric_border(setup)
-
-    def factor_of(lin, u, lam):
-        A = LA.jacobian_from_linear(lin, u, st, sym)
-        dx, db = LA.diagonal(A)
-        return LA.factor(LA.add_diagonal(A, lam * jnp.abs(dx), lam * jnp.abs(db)))
 
     def body(c):
         u, r, frim, it, lam, _, P, refresh, n_fac, n_kry = c
         refresh = refresh | (lam > 0) | (opts.krylov == 0)
         # one linearization per iteration serves the assembly (when refactoring) and GMRES
         r, lin = jax.linearize(fun, u)
-        P = jax.lax.cond(refresh, lambda _: factor_of(lin, u, lam), lambda _: P, None)
+        P = jax.lax.cond(refresh, lambda _: factor_of(lin, u, lam, frim), lambda _: P, None)
 
         def direct(_):  # P is J(u) (+ damping): the exact Newton step
             return -LA.solve_flat(st, P, r), jnp.asarray(0, jnp.int32)
@@ -146,7 +160,7 @@ def _newton(model, params, setup, u0, P0, P0_valid, opts, factor_at_solution):
             d, k, rel = gmres(lin, lambda v: LA.solve_flat(st, P, v), -r, opts.eta, opts.krylov)
             return d, jnp.where(rel <= 0.5, k, opts.krylov + 1).astype(jnp.int32)  # > krylov: no usable step
 
-        delta, k = jax.lax.cond(refresh, direct, krylov, None)
+        delta, k = jax.lax.cond(refresh, direct, krylov, None) if exact else krylov(None)
         n_fac = n_fac + refresh.astype(jnp.int32)
         phi0 = merit(r)
 
@@ -167,7 +181,7 @@ def _newton(model, params, setup, u0, P0, P0_valid, opts, factor_at_solution):
         accept = jnp.isfinite(phi) & (phi < phi0) & (k <= opts.krylov)
         u = jnp.where(accept, un, u)
         r = jnp.where(accept, rn, r)
-        frim = jnp.where(accept, fn, frim)
+        frim = jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), fn, frim)
         # Marquardt damping: off after full steps, raised when a direct step did not lower the
         # residual (a failed Krylov step first retries with a fresh factorization)
         lam = jnp.where(accept, jnp.where(alpha == 1.0, 0.1 * lam, lam),
@@ -182,15 +196,31 @@ def _newton(model, params, setup, u0, P0, P0_valid, opts, factor_at_solution):
 
     # r starts unknown (the first iteration computes it): one residual program fewer to compile,
     # at the price of one Newton step on a guess that already satisfies the tolerance
-    c0 = (u0, jnp.full(st.n, jnp.inf), jnp.zeros(6), 0, opts.lam0, jnp.asarray(False), P0, ~P0_valid, 0, 0)
+    aux0 = jax.tree_util.tree_map(lambda a: jnp.zeros(a.shape, a.dtype), jax.eval_shape(fun_rim, u0)[1])
+    c0 = (u0, jnp.full(st.n, jnp.inf), aux0, 0, opts.lam0, jnp.asarray(False), P0, ~P0_valid, 0, 0)
     u, r, frim, it, lam, done, P, refresh, n_fac, n_kry = jax.lax.while_loop(cond, body, c0)
     if factor_at_solution:  # every iteration ends with a step, so the last factor is never J(u*)
         _, lin = jax.linearize(fun, u)
-        P = factor_of(lin, u, 0.0)
+        P = factor_of(lin, u, 0.0, frim)
         n_fac = n_fac + 1
     f = lambda a: jnp.asarray(a, jnp.float64)  # noqa: E731
     info = jnp.stack([f(it), f(n_fac), f(n_kry), rmax(r), tol, scale, f(done)])
     return u, frim, info, P
+
+
+def tangent_parts(prim, tangents):
+    """(dyn, static, tangents of dyn) of the primal pytrees: a missing tangent (None) is zeros, so the
+    residual's JVP sees one tangent per inexact leaf."""
+    def fill(t, p):
+        if t is None:
+            return jtu.tree_map(lambda a: jnp.zeros_like(a) if eqx.is_inexact_array(a) else None, p)
+        return jtu.tree_map(lambda ti, pi: (jnp.zeros_like(pi) if eqx.is_inexact_array(pi) else None) if ti is None
+                            else ti, t, p, is_leaf=lambda a: a is None)
+
+    tang = tuple(fill(t, p) for t, p in zip(tangents, prim))
+    dyn, static = eqx.partition(prim, eqx.is_inexact_array)
+    tdyn, _ = eqx.partition(tang, eqx.is_inexact_array)
+    return dyn, static, tdyn
 
 
 @eqx.filter_custom_jvp
@@ -204,17 +234,7 @@ def _solve_jvp(primals, tangents):
     tm, tp, ts = tangents[:3]
     u, frim, info, P = _newton(model, params, setup, u0, P0, P0_valid, opts, True)
     st = LA.structure(model, setup.n_border)
-
-    def fill(t, p):
-        if t is None:
-            return jtu.tree_map(lambda a: jnp.zeros_like(a) if eqx.is_inexact_array(a) else None, p)
-        return jtu.tree_map(lambda ti, pi: (jnp.zeros_like(pi) if eqx.is_inexact_array(pi) else None) if ti is None
-                            else ti, t, p, is_leaf=lambda a: a is None)
-
-    prim = (model, params, setup)
-    tang = tuple(fill(t, p) for t, p in zip((tm, tp, ts), prim))
-    dyn, static = eqx.partition(prim, eqx.is_inexact_array)
-    tdyn, _ = eqx.partition(tang, eqx.is_inexact_array)
+    dyn, static, tdyn = tangent_parts((model, params, setup), (tm, tp, ts))
 
     def res(d, u_):
         m, p, s = eqx.combine(d, static)

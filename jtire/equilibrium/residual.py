@@ -194,9 +194,9 @@ def ramp_energy(x, eps):
     return jnp.where(x > eps, 0.5 * x * x - 0.5 * eps * x + eps * eps / 6.0, xc**3 / (6.0 * eps))
 
 
-def friction_shear(z_t, limit, k_t):
-    """Smoothly saturated tread shear z (V) for a trial shear z_t (V), limit = mu F_n (N)."""
-    m = FRICTION_SHARPNESS
+def friction_shear(z_t, limit, k_t, m: int = FRICTION_SHARPNESS):
+    """Smoothly saturated tread shear z (V) for a trial shear z_t (V), limit = mu F_n (N); m (even) the
+    sharpness of the saturation."""
     eps = k_t * 1e-9  # N: keeps 0/0 away where a point is out of contact and unsheared
     kz2 = k_t * k_t * dot(z_t, z_t)
     den = (limit**m + kz2 ** (m // 2) + eps**m) ** (1.0 / m)
