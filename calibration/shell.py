@@ -5,8 +5,8 @@ log-parameter vectors becomes one batch per experiment the targets use (every pa
 condition of that experiment, vmapped and sharded over the devices), reduced on the host exactly as
 `jtire run` reduces it. Its Jacobian is autodiff through the same programs with the experiments'
 traced reductions (`Experiment.traced`): forward mode (vmapped tangents, one per free parameter)
-through the static solves, reverse mode (checkpointed) through the transients; the explicit step of
-each case is held fixed (it is a numerical setting, not physics).
+through the static solves, reverse mode through the steady-rolling solves (implicit) and the
+transients (checkpointed); the explicit step of each case is held fixed (a numerical setting).
 
 Sensitivity quantities beyond the targets (k_sv, k_l, k_by, k_btheta, k_bgamma, k_f, k_m, footprint
 length and width, rolling resistance) come from the experiments' traced reductions at the rated
@@ -195,8 +195,11 @@ class ShellSimulator(Simulator):
         for k, (exp, conds, qs, idx) in enumerate(jobs):
             if self.on_case is not None:
                 self.on_case(label, k, len(jobs))
+            # reverse for fewer quantities than parameters, except through the static solves, whose
+            # forward tangents share one factorization; the steady-rolling solve's are one GMRES each
             mode = self.jacobian_modes.get(exp.name) or (
-                "reverse" if exp.shardable and len(qs) < self.space.d else "forward")
+                "reverse" if (exp.shardable or getattr(exp, "method", None) == "steady") and len(qs) < self.space.d
+                else "forward")
             t1 = time.perf_counter()
             v, jac = traced_jacobian(exp, self.tire, self.params, theta, conds, qs, mode=mode)
             self.last_wall[f"jacobian {exp.name} ({mode})"] = time.perf_counter() - t1
@@ -217,17 +220,17 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: s
     mode "forward": jax.jacfwd (d tangents carried along one run; stores nothing). "reverse":
     jax.jacrev with every transient phase checkpointed (`experiments.program.reverse_mode`): one
     backward sweep per quantity, whatever d is."""
-    if mode == "reverse" and len(conditions) > 1:
-        # one backward sweep per condition, one after another: a sweep of E12 on the default mesh
-        # peaked at 14.6 GB for one case (benchmarks/bench_gradients.py); a vmapped pair would hold both
-        # at once (not tried)
+    if (mode == "reverse" or not exp.shardable) and len(conditions) > 1:
+        # one condition after another: a backward sweep of the transient E12 on the default mesh peaked
+        # at 14.6 GB for one case (benchmarks/bench_gradients.py), and a vmapped Newton solve (static,
+        # steady) runs both branches of every conditional
         parts = [traced_jacobian(exp, tire, params_of, theta, [c], [q], mode) for c, q in zip(conditions, quantities)]
         return np.concatenate([v for v, _ in parts]), np.concatenate([j for _, j in parts])
     model = tire.model
     base = params_of(theta)
     flat = [(i, c) for i, cond in enumerate(conditions) for c in exp.cases(cond)]
-    dts = batch.stable_steps(model, [base] * len(flat), [c["pressure_Pa"] for _, c in flat],
-                             float(exp.proto.settle_damping))
+    dts = (batch.stable_steps(model, [base] * len(flat), [c["pressure_Pa"] for _, c in flat],
+                              float(exp.proto.settle_damping)) if exp.time_stepped else np.full(len(flat), np.nan))
     cases = jax.tree_util.tree_map(lambda *a: jnp.stack(a), *[
         Case.of(c.get("load_N", 0.0), c["pressure_Pa"], dts[k], exp.aux(c)) for k, (_, c) in enumerate(flat)])
 

@@ -144,8 +144,8 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     flat = []  # (condition index, case dict)
     for i, cond in enumerate(conditions):
         flat += [(i, c) for c in exp.cases(cond)]
-    dts = stable_steps(model, [plist[i] for i, _ in flat], [c["pressure_Pa"] for _, c in flat],
-                       float(exp.proto.settle_damping))
+    dts = (stable_steps(model, [plist[i] for i, _ in flat], [c["pressure_Pa"] for _, c in flat],
+                        float(exp.proto.settle_damping)) if exp.time_stepped else np.full(len(flat), np.nan))
     size = len(flat) if batch <= 0 else min(batch, len(flat))
     if not exp.shardable:  # static solves run case by case anyway: each case is its own batch, so it is
         size = 1  # reduced and handed to on_result (saved) the moment it finishes
@@ -231,7 +231,8 @@ def _reduce(exp, tire, condition, outputs, keep, wall_per_case):
         res = exp.reduce(tire, dict(condition), outputs)
     except JtireError as e:
         return CaseFailure(dict(condition), e)
-    res.info |= {"dt_s": outputs[0]["dt"], "wall_s_per_case_in_batch": wall_per_case}
+    res.info |= {"wall_s_per_case_in_batch": wall_per_case} | (
+        {"dt_s": outputs[0]["dt"]} if np.isfinite(outputs[0]["dt"]) else {})
     if keep:
         res.outputs = outputs
     return res

@@ -364,3 +364,16 @@ def is_steady(result: SteadyResult, tol: float) -> bool:
     if not tol >= 0:
         raise ConfigError(f"tol = {tol}: must be >= 0")
     return bool(abs(result.drift_relative) <= tol)
+
+
+N_BLOCKS = 10  # batch means for the standard error of the hub-force mean
+
+
+def block_stderr(y, n_blocks: int = N_BLOCKS) -> float:
+    """Standard error of the mean of a correlated series by batch means (n_blocks equal blocks)."""
+    y = np.asarray(y, float)
+    n = len(y) // n_blocks
+    if n < 2:
+        raise ConfigError(f"series of {len(y)} samples: need at least {2 * n_blocks} for {n_blocks} blocks")
+    means = y[: n * n_blocks].reshape(n_blocks, n).mean(axis=1)
+    return float(means.std(ddof=1) / np.sqrt(n_blocks))

@@ -215,7 +215,13 @@ E12_LOAD = 41.4e3  # N: the second calibration load (target 1701.11 N)
 
 @pytest.fixture(scope="session")
 def e12(runs, e01_grid):
-    """E12 with its default stages at the calibration load 41.4 kN (coarse ring)."""
+    """E12 as a transient with its default stages at the calibration load 41.4 kN (coarse ring)."""
+    return runs("rolling_resistance", [{"pressure_Pa": P_RATED, "load_N": E12_LOAD}], method="transient")
+
+
+@pytest.fixture(scope="session")
+def e12_steady(runs):
+    """E12 as a steady-rolling equilibrium (the default method) at 41.4 kN (coarse ring)."""
     return runs("rolling_resistance", [{"pressure_Pa": P_RATED, "load_N": E12_LOAD}])
 
 
@@ -226,7 +232,26 @@ E10_TABLE = dict(slip_angles_deg=[-2.0, 0.0, 1.0, 2.0], kf_range_deg=[0.0, 2.0],
 
 @pytest.fixture(scope="session")
 def e10(runs, e01_grid):
-    return runs("cornering", [RATED], devices=2, **E10_TABLE)
+    return runs("cornering", [RATED], devices=2, method="transient", **E10_TABLE)
+
+
+# The steady E10 (the default method) on the same angles and more: -4 .. 4 deg, one continuation.
+E10_STEADY_TABLE = dict(slip_angles_deg=[-4.0, -2.0, -1.0, 0.0, 1.0, 2.0, 4.0], kf_range_deg=[0.0, 2.0],
+                        km_range_deg=[0.0, 2.0])
+
+
+@pytest.fixture(scope="session")
+def e10_steady(runs, e12_steady):
+    return runs("cornering", [RATED], **E10_STEADY_TABLE)
+
+
+# The steady E06 on a flat road, slips 0-6 % (1 % apart), k_k fitted over 0-5 %.
+E06_STEADY_TABLE = dict(surface="flat", slip_max_percent=6.0, slip_levels=6, fit_range_percent=[0.0, 5.0])
+
+
+@pytest.fixture(scope="session")
+def e06_steady(runs, e12_steady):
+    return runs("traction", [RATED], **E06_STEADY_TABLE)
 
 
 # E03 on a near-flat drum (20 m) at 30 km/h, 0.2 s of record: the linear vertical belt mode of the tire

@@ -95,9 +95,13 @@ def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01
         # contact height the load phase starts from (a min over the inflated tread, computed eagerly)
         # comes out with the 2-device batch's abstract mesh in its type although it lives on one
         # device: one more trace (and one more compile or cache load), once per process.
-        after_sharded = key == (False, 1) and rs[0].order > first_sharded
-        assert rs[0].traces_added <= (2 if after_sharded else 1), (key, rs[0].exp.name)
-        assert [r.traces_added for r in rs[1:]] == [0] * (len(rs) - 1), (key, [r.exp.name for r in rs])
+        # (which run shows it depends on the order the fixtures were first asked for: with the steady
+        # tests first, E12's one-device run follows E10's 2-device grid and the second trace lands on
+        # the next one-device run): the group as a whole traces once, twice after a 2-device run
+        after_sharded = key == (False, 1) and any(r.order > first_sharded for r in rs)
+        assert rs[0].traces_added >= 1 or rs[0].traces_before > 0, (key, rs[0].exp.name)
+        assert sum(r.traces_added for r in rs) <= (2 if after_sharded else 1), (
+            key, first_sharded, [(r.exp.name, r.order, r.traces_added) for r in rs])
 
 
 def test_program_traces_is_the_phase_program_count():
@@ -214,6 +218,13 @@ def test_traced_equals_host_vertical_and_lateral(e02, e09, coarse_tire):
 def test_traced_equals_host_rolling_and_cornering(e12, e10, coarse_tire):
     _traced_vs_host(e12, coarse_tire)
     _traced_vs_host(e10, coarse_tire)
+
+
+def test_traced_equals_host_steady(e12_steady, e10_steady, coarse_tire):
+    """The steady E12 and E10: the traced reductions read the same equilibrium levels (E12: the same
+    numbers; E10: slopes by another formula, 1e-9)."""
+    _traced_vs_host(e12_steady, coarse_tire)
+    _traced_vs_host(e10_steady, coarse_tire)
 
 
 @pytest.mark.parametrize("name", SIDEWALL)

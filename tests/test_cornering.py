@@ -12,7 +12,7 @@ import pytest
 
 from jtire.config import load_run_config
 from jtire.errors import ConfigError
-from jtire.experiments import cornering, stages
+from jtire.experiments import cornering, loads, stages
 
 from .conftest import REPO, contact_patch, ok
 
@@ -24,9 +24,9 @@ TOL_EXACT = 1e-9  # least squares on points exactly on a line: rounding only
 def test_lateral_force_sae_sign():
     # a > 0 (SAE): the road pushes the tire LEFT, +y in ISO; in SAE (y right) that is negative
     a = np.radians(3.0)
-    assert cornering.lateral_sae(a, 0.0, 1000.0) == pytest.approx(-1000.0 * np.cos(a), rel=TOL_EXACT)
+    assert loads.lateral_sae(a, 0.0, 1000.0) == pytest.approx(-1000.0 * np.cos(a), rel=TOL_EXACT)
     # the drag (F_x < 0) leans into the lateral axis of the road frame: -F_x sin a > 0
-    assert cornering.lateral_sae(a, -200.0, 0.0) == pytest.approx(200.0 * np.sin(a), rel=TOL_EXACT)
+    assert loads.lateral_sae(a, -200.0, 0.0) == pytest.approx(200.0 * np.sin(a), rel=TOL_EXACT)
 
 
 def test_slip_angle_and_force_directions_agree():
@@ -34,7 +34,7 @@ def test_slip_angle_and_force_directions_agree():
     # friction on the tire opposes it: along +road velocity, whose y component must be +ISO (left)
     a = np.radians(2.0)
     assert float(stages.road_velocity(6.7, a)[1]) > 0
-    assert cornering.lateral_sae(a, 0.0, +1.0) < 0  # a left (ISO +y) force is negative in SAE
+    assert loads.lateral_sae(a, 0.0, +1.0) < 0  # a left (ISO +y) force is negative in SAE
 
 
 def test_reduce_cornering_known_slopes():
@@ -69,7 +69,9 @@ def test_configs_parse(name):
     assert kf == pytest.approx(tuple(np.radians([0.0, 2.0])))
     if name == "cornering":
         assert np.degrees(exp.slip_angles) == pytest.approx([0, 1, 2, 3, 4, 6, 8, 10, 12, 20])
-        assert [c["slip_angle"] for c in exp.cases(rc.condition)] == pytest.approx(list(exp.slip_angles))
+        assert exp.method == "steady" and len(exp.cases(rc.condition)) == 1  # one continuation over the angles
+        transient = load_run_config(CONFIGS / f"{name}.toml", ["cornering.method=transient"]).experiments[0]
+        assert [c["slip_angle"] for c in transient.cases(rc.condition)] == pytest.approx(list(exp.slip_angles))
     else:
         assert float(exp.lateral.force) == pytest.approx(5e3) and not exp.lateral.with_decay
 
@@ -100,7 +102,7 @@ def test_relaxation_length_from_real_e09_and_e10_runs(e10, e09_static, e01_stati
     from .conftest import E10_TABLE, RATED
 
     table = {k: E10_TABLE[k] for k in ("slip_angles_deg", "kf_range_deg", "settle_s", "ramp_s", "release_s",
-                                       "measure_s")} | {"lateral_force_kN": 5.0}
+                                       "measure_s")} | {"lateral_force_kN": 5.0, "method": "transient"}
     cls = REGISTRY["relaxation_length"]
     table = validate_table(table, cls.schema, cls.name)
     e11 = cls.from_table(table, protocol, spec)

@@ -19,7 +19,7 @@ from jtire import batch, solve
 from jtire.config import load_run_config
 from jtire.errors import ConfigError
 from jtire.experiments.decay import release_branch
-from jtire.experiments.lateral import wheel_mass
+from jtire.experiments.decay import wheel_mass
 from jtire.experiments.loads import DOWN, RIM_Z
 from jtire.experiments.phases import FAR, Case, first_contact_height, flat_road, inflate_branch
 from jtire.experiments.program import check_phase, phase, run_plan

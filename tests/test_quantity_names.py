@@ -14,11 +14,12 @@ from jtire.experiments import REGISTRY
 from .conftest import SIDEWALL, ok
 
 # every cached run of the fast suite, by its fixture (each experiment with every table option that
-# changes its quantities: E01/E02 static and transient, E09 with and without its release decay)
-RUN_FIXTURES = ("e01_grid", "e01_static", "e02", "e02_static", "e03", "e04", "e09", "e09_static", "e10", "e12")
+# changes its quantities: E01/E02 static and transient, E09 with and without its release decay, E10 and E12
+# transient and steady; E06 steady, its transient in the slow suite)
+RUN_FIXTURES = ("e01_grid", "e01_static", "e02", "e02_static", "e03", "e04", "e09", "e09_static", "e10", "e12",
+                "e10_steady", "e12_steady", "e06_steady")
 # checked outside this file, and why
 ELSEWHERE = {"relaxation_length": "a composite of E10 and E09: tests/test_cornering.py",
-             "traction": "E06 is rebuilt on a steady solve; its tests check its run",
              "slip_step": "the rigid-ring validation's shell run: tests/test_validate.py"}
 
 

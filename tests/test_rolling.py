@@ -14,6 +14,7 @@ import pytest
 
 from jtire.config import load_run_config
 from jtire.errors import ConfigError
+from jtire import signals
 from jtire.experiments import rolling, stages
 from jtire.physics import rim
 from jtire.physics.geometry_ops import V
@@ -106,9 +107,9 @@ def test_reduce_rolling_recovers_known_drag_and_power():
 def test_block_stderr_closed_form():
     means = np.arange(10.0)
     y = np.repeat(means, 20)  # 10 blocks of 20 equal samples: stderr = std(means) / sqrt(10)
-    assert rolling.block_stderr(y) == pytest.approx(np.std(means, ddof=1) / np.sqrt(10), rel=TOL_EXACT)
+    assert signals.block_stderr(y) == pytest.approx(np.std(means, ddof=1) / np.sqrt(10), rel=TOL_EXACT)
     with pytest.raises(ConfigError):
-        rolling.block_stderr(np.ones(5))
+        signals.block_stderr(np.ones(5))
 
 
 # ---- config ---------------------------------------------------------------------------------

@@ -35,9 +35,10 @@ def table_lines(res) -> list:
     w = max(len(k) for k in res.quantities) if res.quantities else 10
     for k, v in res.quantities.items():
         lines.append(f"  {k:<{w}}  {_fmt(v)}")
-    if res.info.get("method") == "static":
-        lines.append(f"  {'converged':<{w}}  {res.checks.get('static_converged')}   (static: {res.info.get('levels')} "
-                     f"levels, {res.info.get('newton_iterations')} Newton iterations, "
+    method = res.info.get("method")
+    if method in ("static", "steady"):
+        lines.append(f"  {'converged':<{w}}  {res.checks.get(method + '_converged')}   ({method}: "
+                     f"{res.info.get('levels')} levels, {res.info.get('newton_iterations')} Newton iterations, "
                      f"{res.info.get('wall_s', 0):.1f} s wall incl. compile)")
         return lines
     settled = all(v for k, v in res.checks.items() if k.endswith("_settled"))

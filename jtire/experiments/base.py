@@ -41,12 +41,17 @@ class Experiment(eqx.Module):
 
     @property
     def shardable(self) -> bool:
-        """Whether a batch of this experiment may be split over several devices. Static solves may
-        not: their Newton loops end after a different number of iterations on each device, and the
+        """Whether a batch of this experiment may be split over several devices. Static and steady
+        solves may not: their Newton loops end after a different number of iterations on each device, and the
         partitioned program then deadlocks on CPU host devices (measured: a 4-case E01 static batch
         on 2 devices hung with every thread waiting); `batch.run` runs them case by case, unbatched,
         on one device (a vmapped Newton loop runs both branches of its conditionals)."""
-        return getattr(self, "method", "transient") != "static"
+        return self.time_stepped
+
+    @property
+    def time_stepped(self) -> bool:
+        """Whether the experiment integrates in time (needs the explicit step of each case)."""
+        return getattr(self, "method", "transient") not in ("static", "steady")
 
     @classmethod
     @abc.abstractmethod

@@ -35,11 +35,10 @@ from ..physics.drum import Cleat, Drum, DrumWithCleat
 from ..schema import Field, check_range_pair
 from ..state import TireState
 from .base import Experiment
-from .footprint import contact_check, run_info
 from .loads import DOWN, RIM_SPIN, RIM_Z
 from .patch import surface_gap, x_range_traced
 from .phases import first_contact_height, make_drive, with_spin
-from .program import Phase, check_phase, f64, phase, phase_checks, require_equilibrium, run_plan
+from .program import Phase, check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info, run_plan
 from .result import ExperimentResult
 
 CROSS_ALLOWANCE = 0.06  # s: room in the impact phase for the cleat to cross the patch (2a + cleat < 0.8 m at 50 km/h)

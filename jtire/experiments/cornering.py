@@ -1,6 +1,10 @@
 """E10 cornering and aligning-torque stiffness (k_f, k_m) and E11 relaxation length sigma = k_f / k_l.
 
-The tire is dragged free-rolling (spin free, no drive torque: a truck pusher axle) on the flat-track
+Method "steady" (default): the loaded, free-rolling tire as a steady-rolling equilibrium at every slip
+angle (`experiments.steady.slip_angle_sweep`: continuation outwards from 0), one case per condition;
+the forces are the equilibrium's own, with no ripple to average (standard errors 0).
+
+Method "transient": the tire is dragged free-rolling (spin free, no drive torque: a truck pusher axle) on the flat-track
 machine (`stages.rolling_plan`): the axle stays, the road moves under it at V (-cos a, +sin a, 0) (ISO)
 for an SAE slip angle a. Rim lateral position, camber and steer held; z carries the load. Every slip
 angle is a case of its own (case aux = the angle), so a whole sweep, or a whole grid of sweeps, is one
@@ -16,6 +20,7 @@ Reduction (experiments.md), SAE signs at the boundary (y_SAE = -y, z_SAE = -z):
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -25,13 +30,10 @@ from ..errors import ConfigError
 from ..schema import Field, check_range_pair
 from .base import Experiment
 from .lateral import LateralStiffness
+from .loads import lateral_sae
+from . import steady as ST
 from .result import ExperimentResult
-from .rolling import Rolling, block_stderr
-
-
-def lateral_sae(alpha, fx, fy_iso, xp=np):
-    """Lateral force in road axes, SAE signs: F_y,SAE cos a - F_x sin a (N), F_y,SAE = -F_y,ISO."""
-    return -fy_iso * xp.cos(alpha) - fx * xp.sin(alpha)
+from .stages import Rolling
 
 
 def reduce_cornering(alpha, fx, fy_iso, mz_iso, kf_range, km_range):
@@ -66,13 +68,14 @@ def _range_mask(angles, rng, name):
 
 
 COMMON = {
+    "method": Field(str, default="steady", choices=("steady", "transient")),
     "speed_mph": Field(float, U.MPH, 0.5, 60, 15.0, "mph"),
     "settle_s": Field(float, 1, 0.005, 5, 0.25, "s"),
     "ramp_s": Field(float, 1, 0.0, 1, 0.06, "s"),
     "release_s": Field(float, 1, 0.0, 2, 0.03, "s"),
     "measure_s": Field(float, 1, 0.005, 5, 0.05, "s"),
     "settle_damping_per_s": Field(float, 1, 0, 1e4, 0.0, "1/s (0: the solver's settle damping)"),
-}
+} | ST.STEADY_FIELDS
 
 
 class Cornering(Rolling):
@@ -105,15 +108,30 @@ class Cornering(Rolling):
         kf_mask = tuple(bool(v) for v in _range_mask(angles, kf, f"{name}.kf_range_deg"))
         km_mask = tuple(bool(v) for v in _range_mask(angles, km, f"{name}.km_range_deg"))
         return cls(slip_angles=angles, kf_mask=kf_mask, km_mask=km_mask, kf_range=kf, km_range=km,
-                   **cls.rolling_fields(table, proto, tire_spec, table["settle_damping_per_s"]))
+                   **cls.rolling_fields(table, proto, tire_spec, table["settle_damping_per_s"], name=name))
 
     def cases(self, condition):
+        if self.method == "steady":  # the whole sweep is one continuation
+            return [dict(condition)]
         return [dict(condition, slip_angle=a) for a in self.slip_angles]
 
+    def aux(self, case):
+        return np.zeros(0) if self.method == "steady" else super().aux(case)
+
     def simulate(self, model, params, case):
+        if self.method == "steady":
+            path = self.loaded(model, params, case)
+            n = len(path.obs)
+            obs = ST.slip_angle_sweep(path, self.slip_angles, self.speed, case.load, subpoints=self.subpoints)
+            loaded = ST.stacked(path, range(n))
+            return loaded | {"angles": jax.tree_util.tree_map(lambda *a: jnp.stack(a), *obs),
+                             "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"]}
         return self.roll(model, params, case, case.aux[0])
 
     def _means(self, outputs, xp):
+        if self.method == "steady":
+            ang = outputs[0]["angles"]
+            return ang["contact_force"], ang["contact_moment"][:, 2]
         f, m = [], []
         for out in outputs:
             s = out["phases"].saved
@@ -129,6 +147,8 @@ class Cornering(Rolling):
                 "k_m_Nm_per_rad": _slope_traced(a, -mz, np.array(self.km_mask))}
 
     def reduce(self, tire, condition, outputs):
+        if self.method == "steady":
+            return self._reduce_steady(condition, outputs[0])
         model, load = tire.model, condition["load_N"]
         checks = {}
         for out, a in zip(outputs, self.slip_angles):
@@ -142,7 +162,7 @@ class Cornering(Rolling):
         fxyz = np.stack([s["contact_force"][:-1] for _, s in series])  # (n, N-1, 3)
         mzs = np.stack([s["contact_moment"][:-1, 2] for _, s in series])
         means = {"F_x": fxyz[..., 0].mean(1), "F_y": fxyz[..., 1].mean(1), "F_z": fxyz[..., 2].mean(1), "M_z": mzs.mean(1)}
-        err = {k: np.array([block_stderr(row) for row in v]) for k, v in
+        err = {k: np.array([signals.block_stderr(row) for row in v]) for k, v in
                (("F_x", fxyz[..., 0]), ("F_y", fxyz[..., 1]), ("M_z", mzs))}
         drift = np.array([signals.steady_mean(t[:-1], s["contact_force"][:-1, 1]).drift_relative
                           if abs(s["contact_force"][:-1, 1].mean()) > 1.0 else np.nan for t, s in series])
@@ -162,6 +182,30 @@ class Cornering(Rolling):
                 "settle_s": float(self.settle_s), "ramp_s": self.ramp_s, "release_s": self.release_s,
                 "measure_s": float(series[0][0][-1] - series[0][0][0])}
         info["steps"] = int(sum(info["steps_per_angle"]))
+        return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
+
+    def _reduce_steady(self, condition, out):
+        load = condition["load_N"]
+        checks, info = ST.summary(self.name, out["infos"], ST.level_names(self.load_levels))
+        sweep, _ = ST.summary(self.name, out["sweep_infos"], lambda k: f"slip-angle sweep, level {k + 1}")
+        a = np.asarray(self.slip_angles)
+        ang = jax.tree_util.tree_map(np.asarray, out["angles"])
+        f, mz = ang["contact_force"], ang["contact_moment"][:, 2]
+        q, curves = reduce_cornering(a, f[:, 0], f[:, 1], mz, self.kf_range, self.km_range)
+        lat = curves["lateral_force_N"]
+        q |= {"peak_lateral_force_N": float(np.max(np.abs(lat))),
+              "peak_lateral_force_over_load": float(np.max(np.abs(lat))) / load,
+              "speed_m_per_s": float(self.speed), "load_N": load}
+        zero = np.zeros_like(a)
+        sig = {"slip_angle_deg": np.degrees(a), "lateral_force_N": lat, "lateral_force_stderr_N": zero,
+               "F_x_N": f[:, 0], "F_y_SAE_N": -f[:, 1], "M_z_SAE_Nm": curves["aligning_moment_Nm"],
+               "M_z_stderr_Nm": zero, "F_z_N": f[:, 2], "spin_rad_per_s": ang["omega"], "F_y_drift_rel": zero}
+        sw = jax.tree_util.tree_map(np.asarray, out["sweep_infos"])
+        checks |= {"sweep_converged": sweep["steady_converged"],
+                   "max_vertical_force_vs_load_rel_error": float(np.max(np.abs(f[:, 2] - load)) / load)}
+        info |= {"n_slip_angles": len(a), "levels": info["levels"] + int(len(sw.converged)),
+                 "newton_iterations": info["newton_iterations"] + int(sw.iterations.sum()),
+                 "steady_subpoints": self.subpoints}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
 
 

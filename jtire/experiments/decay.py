@@ -79,3 +79,8 @@ def decay_checks(fd, out, prefix="release") -> dict:
 def sample_times(out, duration: float, n_save: int) -> np.ndarray:
     """The save times (s) of a phase that ran its whole `duration` from out.t0."""
     return np.linspace(float(out.t0), float(out.t0) + duration, n_save)
+
+
+def wheel_mass(spec) -> float:
+    """m_wheel = m_tot: tire + rim mass from the tire config (kg)."""
+    return spec.masses.tire + spec.masses.rim

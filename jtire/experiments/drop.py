@@ -29,12 +29,10 @@ from ..errors import ConfigError
 from ..schema import Field
 from ..state import TireState
 from .base import Experiment
-from .decay import decay_checks, decay_names, decay_quantities, release_branch, sample_times
-from .footprint import contact_check, run_info
-from .lateral import wheel_mass
+from .decay import decay_checks, decay_names, decay_quantities, release_branch, sample_times, wheel_mass
 from .loads import DOWN, RIM_Z
 from .phases import FAR, first_contact_height, flat_road, inflate_branch, make_drive
-from .program import Phase, check_phase, f64, phase, require_equilibrium, run_plan
+from .program import Phase, check_phase, contact_check, f64, phase, require_equilibrium, run_info, run_plan
 from .result import ExperimentResult
 
 

@@ -14,33 +14,13 @@ import numpy as np
 
 from .. import solve
 from ..errors import SimulationError
-from ..state import TireState
 from . import patch
 from ..schema import Field
 from .base import Experiment
-from .loads import DOWN, RIM_Z
-from .phases import FAR, flat_road, inflate_branch, load_branch
-from .program import check_phase, last_valid, phase, phase_checks, require_equilibrium, run_plan
+from .phases import loaded_plan
+from .program import check_phase, contact_check, phase, phase_checks, require_equilibrium, run_info
 from .result import ExperimentResult
 from .static_path import STATIC_LOADS, check_static_path, static_summary, static_vertical_path
-
-
-def loaded_plan(model, params, case, proto, load, n_save, extra=(), ramp=None, mem=None):
-    """Inflate, touch the road, ramp `load` (N) onto the rim (z free) over `ramp` (default the
-    protocol's) and settle, then any `extra` branches. Returns (PhaseOut stacked, end state, mem with
-    z_road and the entries of `mem`)."""
-    branches = [inflate_branch(case, proto, flat_road(-FAR)),
-                load_branch(model, case, proto, lambda mem: flat_road(mem["z_road"]), load * DOWN, RIM_Z, ramp=ramp),
-                *extra]
-    y0 = TireState.at_rest(model, len(params.relaxation_times))
-    return run_plan(model, params, branches, y0, {"z_road": jnp.nan} | (mem or {}), proto.ke_tol, n_save)
-
-
-def contact_check(saved, load):
-    """(F_z, relative error against the load, F_y) at the last saved sample of a settled phase."""
-    i = last_valid(saved)
-    f = np.asarray(saved["contact_force"])[i]
-    return float(f[2]), abs(float(f[2]) - load) / load, float(f[1])
 
 
 class Footprint(Experiment):
@@ -106,10 +86,3 @@ class Footprint(Experiment):
              "measured_contact_length_m": ref["footprint_length_mm"] or None,
              "measured_contact_width_m": ref["footprint_width_mm"] or None}
         return ExperimentResult(self.name, condition, q, checks=checks, info=info)
-
-
-def run_info(phases) -> dict:
-    """Steps, simulated time and step size of a run (host)."""
-    n = np.asarray(phases.n_steps)
-    return {"steps": int(n.sum()), "simulated_s": float(np.asarray(phases.t_end)[-1]),
-            "phase_steps": [int(v) for v in n]}

@@ -27,11 +27,11 @@ from .. import units as U
 from ..errors import ConfigError
 from ..schema import Field
 from .base import Experiment
-from .decay import decay_about_fit, decay_checks, decay_names, decay_quantities, release_branch, sample_times
-from .footprint import contact_check, loaded_plan, run_info
+from .decay import (decay_about_fit, decay_checks, decay_names, decay_quantities, release_branch, sample_times,
+                    wheel_mass)
 from .loads import DOWN, LEFT, RIM_YZ
-from .phases import flat_road, load_branch
-from .program import check_phase, f64, phase, phase_checks, require_equilibrium
+from .phases import flat_road, load_branch, loaded_plan
+from .program import check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info
 from .result import ExperimentResult
 from .static_path import STATIC_LOADS, check_static_path, static_summary, static_vertical_path
 
@@ -40,11 +40,6 @@ def _static_y(st):
     """The rim's lateral travel (m, +y) from the last vertical level to the last lateral level of a
     static path (traceable; numpy on the host)."""
     return st["lateral_q"][-1, 1] - st["q"][-1, 1]
-
-
-def wheel_mass(spec) -> float:
-    """m_wheel = m_tot: tire + rim mass from the tire config (kg)."""
-    return spec.masses.tire + spec.masses.rim
 
 
 def lateral_branches(model, case, proto, force):

@@ -14,3 +14,8 @@ RIM_Z = np.array([0.0, 0, 1, 0, 0, 0])  # vertical load on the rim, everything e
 RIM_YZ = np.array([0.0, 1, 1, 0, 0, 0])  # vertical and lateral load
 RIM_SPIN = np.array([0.0, 0, 0, 0, 1, 0])  # rim held except its spin about the axle
 RIM_Z_SPIN = np.array([0.0, 0, 1, 0, 1, 0])  # rolling with the load on the rim, no drive torque
+
+
+def lateral_sae(alpha, fx, fy_iso, xp=np):
+    """Lateral force in road axes, SAE signs: F_y,SAE cos a - F_x sin a (N), F_y,SAE = -F_y,ISO."""
+    return -fy_iso * xp.cos(alpha) - fx * xp.sin(alpha)

@@ -13,8 +13,9 @@ import numpy as np
 
 from ..physics import rim
 from ..physics.contact import FlatRoad, NoSurface
-from ..state import Drive
-from .program import Phase, f64
+from ..state import Drive, TireState
+from .loads import DOWN, RIM_Z
+from .program import Phase, f64, run_plan
 
 
 class Case(eqx.Module):
@@ -121,3 +122,14 @@ def spin_increment(y, d_omega):
     rigid increment that adds no deformation rate, so a new wheel speed starts without a jolt."""
     dq = jnp.zeros(6).at[4].set(d_omega)
     return eqx.tree_at(lambda s: (s.qd, s.v), y, (y.qd + dq, y.v + rim.frame_velocity(y.q, dq, y.x)))
+
+
+def loaded_plan(model, params, case, proto, load, n_save, extra=(), ramp=None, mem=None):
+    """Inflate, touch the road, ramp `load` (N) onto the rim (z free) over `ramp` (default the
+    protocol's) and settle, then any `extra` branches. Returns (PhaseOut stacked, end state, mem with
+    z_road and the entries of `mem`)."""
+    branches = [inflate_branch(case, proto, flat_road(-FAR)),
+                load_branch(model, case, proto, lambda mem: flat_road(mem["z_road"]), load * DOWN, RIM_Z, ramp=ramp),
+                *extra]
+    y0 = TireState.at_rest(model, len(params.relaxation_times))
+    return run_plan(model, params, branches, y0, {"z_road": jnp.nan} | (mem or {}), proto.ke_tol, n_save)

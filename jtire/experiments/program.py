@@ -221,3 +221,17 @@ def require_equilibrium(label: str, got: float, want: float, tol: float = EQUILI
         raise SimulationError(f"{label}: not in equilibrium: {got:.6g} N carried against {want:.6g} N applied "
                               f"({100 * (got - want) / abs(want):+.2f} %, tolerance {100 * tol:g} %)")
     return err
+
+
+def contact_check(saved, load):
+    """(F_z, relative error against the load, F_y) at the last saved sample of a settled phase."""
+    i = last_valid(saved)
+    f = np.asarray(saved["contact_force"])[i]
+    return float(f[2]), abs(float(f[2]) - load) / load, float(f[1])
+
+
+def run_info(phases) -> dict:
+    """Steps, simulated time and step size of a run (host)."""
+    n = np.asarray(phases.n_steps)
+    return {"steps": int(n.sum()), "simulated_s": float(np.asarray(phases.t_end)[-1]),
+            "phase_steps": [int(v) for v in n]}

@@ -1,6 +1,11 @@
 """E12 rolling resistance on a flat-track machine: the axle stays, the road moves under it.
 
-The sequence is `stages.rolling_plan` (inflate, load, settle with rim-frame damping, damping ramped
+Method "steady" (default): the loaded, free-rolling tire as a steady-rolling equilibrium
+(`experiments.steady`): the drag is the hub force, checked against the lost power over the speed (the
+two differ by the flow's discretization; beyond `steady.ENERGY_BALANCE_TOL` it is an error). No
+settling, no ripple, derivatives by the implicit function theorem.
+
+Method "transient": the sequence is `stages.rolling_plan` (inflate, load, settle with rim-frame damping, damping ramped
 off, release, measure over whole segment-passing periods) at slip angle 0. Two readings of the
 rolling resistance (physics notes): the hub force (steady mean of -F_x; `contact_force` is the road's
 force on the tire, so the drag is -F_x) and the lost power over the speed (the model's own losses,
@@ -17,28 +22,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import signals, solve
+from .. import signals
 from .. import units as U
 from ..errors import ConfigError
 from ..schema import Field
-from .base import Experiment
-from .footprint import run_info
-from .program import check_phase, f64, phase, phase_checks
+from . import steady as ST
+from .program import phase, run_info
 from .result import ExperimentResult
-from .stages import STAGE_CODE, rolling_plan, stage_names
+from .stages import ROLLING_SCHEMA, STAGE_CODE, Rolling
 
-N_BLOCKS = 10  # batch means for the standard error of the hub-force mean
-
-
-def block_stderr(y, n_blocks: int = N_BLOCKS) -> float:
-    """Standard error of the mean of a correlated series by batch means (n_blocks equal blocks)."""
-    y = np.asarray(y, float)
-    n = len(y) // n_blocks
-    if n < 2:
-        raise ConfigError(f"series of {len(y)} samples: need at least {2 * n_blocks} for {n_blocks} blocks")
-    means = y[: n * n_blocks].reshape(n_blocks, n).mean(axis=1)
-    return float(means.std(ddof=1) / np.sqrt(n_blocks))
-
+METHOD = {"method": Field(str, default="steady", choices=("steady", "transient"))}
 
 def reduce_rolling(t, fx, fz, dissipated, speed, friction=None):
     """Rolling resistance from one measurement window.
@@ -65,7 +58,7 @@ def reduce_rolling(t, fx, fz, dissipated, speed, friction=None):
     return {
         "rolling_resistance_N": drag.mean,
         "rrc": drag.mean / fz_mean,
-        "rolling_resistance_stderr_N": block_stderr(-fx[:-1]),
+        "rolling_resistance_stderr_N": signals.block_stderr(-fx[:-1]),
         "rolling_resistance_std_N": drag.std,
         "dissipated_power_W": p_diss,  # rubber + sliding
         "rubber_power_W": p_diss - p_fric,
@@ -80,77 +73,28 @@ def reduce_rolling(t, fx, fz, dissipated, speed, friction=None):
     }
 
 
-# Stage lengths (defaults measured on the default tire at 41.4 kN, 15 mph): the dissipated power is
-# within 1 % of its final value after 40 ms of damped rolling; the ramp (60 ms) and 20 ms of free
-# rolling leave a spin wobble below 0.006 rad/s; 80 ms (~11 segment periods) of measurement then
-# give the hub-force mean to a few percent (block standard error reported).
-ROLLING_SCHEMA = {
-    "speed_mph": Field(float, U.MPH, 0.5, 60, 15.0, "mph"),
-    "settle_s": Field(float, 1, 0.005, 2, 0.04, "s"),
-    "ramp_s": Field(float, 1, 0.0, 1, 0.06, "s"),
-    "release_s": Field(float, 1, 0.0, 2, 0.02, "s"),
-    "measure_s": Field(float, 1, 0.005, 5, 0.08, "s"),
-}
-
-
-class Rolling(Experiment):
-    """Settings shared by the rolling experiments (E10, E11, E12)."""
-
-    speed: jax.Array
-    settle_s: jax.Array
-    measure_s: jax.Array
-    damping: jax.Array  # 1/s, relative to the rim frame, in the settle stage
-    ramp_s: float = eqx.field(static=True)
-    release_s: float = eqx.field(static=True)
-    outer_radius: float = eqx.field(static=True)
-    n_save: int = eqx.field(static=True, default=solve.N_SAVE)
-
-    @staticmethod
-    def rolling_fields(table, proto, tire_spec, damping=0.0):
-        return dict(proto=proto, speed=f64(table["speed_mph"]), settle_s=f64(table["settle_s"]),
-                    measure_s=f64(table["measure_s"]),
-                    damping=f64(damping if damping > 0 else float(proto.settle_damping)),
-                    ramp_s=float(table["ramp_s"]), release_s=float(table["release_s"]),
-                    outer_radius=float(tire_spec.geometry.outer_radius))
-
-    def roll(self, model, params, case, slip_angle):
-        outs, y, mem = rolling_plan(model, params, case, self.proto, outer_radius=self.outer_radius, speed=self.speed,
-                                    slip_angle=slip_angle, settle_s=self.settle_s, ramp_s=self.ramp_s,
-                                    release_s=self.release_s, measure_s=self.measure_s, damping=self.damping,
-                                    n_save=self.n_save)
-        return {"phases": outs}
-
-    def stages(self):
-        return ["inflate", "load"] + stage_names(self.ramp_s, self.release_s)
-
-    def check(self, out, model, where=""):
-        names = self.stages()
-        for i, name in enumerate(names):
-            check_phase(name, phase(out["phases"], i), model, require_settled=i < 2, where=where)
-        return phase_checks("inflate", phase(out["phases"], 0), model) | phase_checks("load", phase(out["phases"], 1), model)
-
-    def measure_samples(self, out):
-        """(t (n_save,), saved dict) of the measurement stage (numpy)."""
-        ms = phase(out["phases"], len(self.stages()) - 1)
-        t = np.linspace(float(ms.t0), float(ms.t_end), self.n_save)
-        return t, jax.tree_util.tree_map(np.asarray, ms.saved)
-
-
 class RollingResistance(Rolling):
     name = "rolling_resistance"
     study_id = "E12"
     description = "E12 rolling resistance: drag and RRC on a moving flat road, checked against dissipated power"
-    schema = ROLLING_SCHEMA | {"calibration_loads_kN": Field(list, U.KN, 1, 500, [38.7, 41.4], "kN"),
-                               "calibration_targets_N": Field(list, 1, 0, 1e5, [1529.39, 1701.11], "N")}
+    schema = METHOD | ROLLING_SCHEMA | ST.STEADY_FIELDS | {
+        "calibration_loads_kN": Field(list, U.KN, 1, 500, [38.7, 41.4], "kN"),
+        "calibration_targets_N": Field(list, 1, 0, 1e5, [1529.39, 1701.11], "N")}
     traced_names = ("rolling_resistance_N", "rolling_resistance_from_power_N", "rrc")
-    quantity_names = ("rolling_resistance_N", "rrc", "rolling_resistance_stderr_N", "rolling_resistance_std_N",
-                      "dissipated_power_W", "rubber_power_W", "friction_power_W", "rolling_resistance_from_power_N",
-                      "rrc_from_power", "energy_balance_rel_diff", "unaccounted_power_W",
-                      "dissipated_power_halves_rel_diff", "vertical_force_N", "window_s",
-                      "effective_rolling_radius_m", "spin_rad_per_s", "deflection_m", "speed_m_per_s", "load_N",
-                      "target_N", "error_vs_target_rel")
+    COMMON = ("rolling_resistance_N", "rrc", "dissipated_power_W", "rubber_power_W", "friction_power_W",
+              "rolling_resistance_from_power_N", "rrc_from_power", "energy_balance_rel_diff", "vertical_force_N",
+              "effective_rolling_radius_m", "spin_rad_per_s", "deflection_m", "speed_m_per_s", "load_N", "target_N",
+              "error_vs_target_rel")
+    TRANSIENT = ("rolling_resistance_stderr_N", "rolling_resistance_std_N", "unaccounted_power_W",
+                 "dissipated_power_halves_rel_diff", "window_s")
+    STEADY = ("viscoelastic_power_W", "tread_damping_power_W")
+    quantity_names = COMMON + STEADY
 
     calibration: tuple = eqx.field(static=True, default=())
+
+    @classmethod
+    def produces(cls, table):
+        return cls.COMMON + (cls.STEADY if table["method"] == "steady" else cls.TRANSIENT)
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):
@@ -158,12 +102,21 @@ class RollingResistance(Rolling):
         if len(loads) != len(targets):
             raise ConfigError(f"rolling_resistance.calibration_targets_N: {len(targets)} values, must match "
                               f"calibration_loads_kN ({len(loads)})")
-        return cls(calibration=tuple(zip(loads, targets)), **cls.rolling_fields(table, proto, tire_spec))
+        return cls(calibration=tuple(zip(loads, targets)), **cls.rolling_fields(table, proto, tire_spec,
+                                                                                 name=cls.name))
 
     def simulate(self, model, params, case):
+        if self.method == "steady":
+            return ST.stacked(self.loaded(model, params, case))
         return self.roll(model, params, case, 0.0)
 
     def traced(self, model, params, condition_cases, outputs):
+        if self.method == "steady":
+            lv = jax.tree_util.tree_map(lambda a: a[-1], outputs[0]["levels"])
+            drag = -lv["tire_on_rim"][0]
+            power = lv["power_rubber"] + lv["power_contact_damping"] + lv["power_friction"]
+            return {"rolling_resistance_N": drag, "rolling_resistance_from_power_N": power / self.speed,
+                    "rrc": drag / lv["contact_force"][2]}
         ms = jax.tree_util.tree_map(lambda a: a[-1], outputs[0]["phases"])
         fx, fz = ms.saved["contact_force"][:-1, 0], ms.saved["contact_force"][:-1, 2]
         d = ms.saved["dissipated"] + ms.saved["friction_work"]
@@ -172,7 +125,15 @@ class RollingResistance(Rolling):
         return {"rolling_resistance_N": drag, "rolling_resistance_from_power_N": (d[-1] - d[0]) / span / self.speed,
                 "rrc": drag / jnp.mean(fz)}
 
+    def _target(self, load, q):
+        target = next((tg for L, tg in self.calibration if abs(L - load) <= 5e-3 * load), None)
+        q["target_N"] = target
+        q["error_vs_target_rel"] = None if target is None else (q["rolling_resistance_N"] - target) / target
+        return q
+
     def reduce(self, tire, condition, outputs):
+        if self.method == "steady":
+            return self._reduce_steady(tire, condition, outputs[0])
         out = outputs[0]
         model, load, speed = tire.model, condition["load_N"], float(self.speed)
         checks = self.check(out, model)
@@ -183,9 +144,7 @@ class RollingResistance(Rolling):
         ld = phase(out["phases"], 1)
         q |= {"effective_rolling_radius_m": speed / spin, "spin_rad_per_s": spin, "deflection_m": -float(ld.q_end[2]),
               "speed_m_per_s": speed, "load_N": load}
-        target = next((tg for L, tg in self.calibration if abs(L - load) <= 5e-3 * load), None)
-        q["target_N"] = target
-        q["error_vs_target_rel"] = None if target is None else (q["rolling_resistance_N"] - target) / target
+        q = self._target(load, q)
         checks |= {"vertical_force_vs_load_rel_error": abs(q["vertical_force_N"] - load) / load,
                    "drag_drift_relative": signals.steady_mean(t[:-1], -s["contact_force"][:-1, 0]).drift_relative,
                    "spin_std_in_measurement_rad_per_s": float(s["qd"][:, 4].std()),
@@ -206,4 +165,27 @@ class RollingResistance(Rolling):
                "settle_work_J": cat(lambda sv: sv["settle_work"])}
         info = run_info(out["phases"]) | {"settle_s": float(self.settle_s), "ramp_s": self.ramp_s,
                                           "release_s": self.release_s, "measure_s": float(t[-1] - t[0])}
+        return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
+
+    def _reduce_steady(self, tire, condition, out):
+        load, speed = condition["load_N"], float(self.speed)
+        names = ST.level_names(self.load_levels)
+        checks, info = ST.summary(self.name, out["infos"], names)
+        lv = ST.level(out, -1)
+        drag, fz, omega = -float(lv["tire_on_rim"][0]), float(lv["contact_force"][2]), float(lv["omega"])
+        q = {"rolling_resistance_N": drag, "rrc": drag / fz}
+        q |= ST.losses(lv)
+        f_power = q["dissipated_power_W"] / speed
+        q |= {"rolling_resistance_from_power_N": f_power, "rrc_from_power": f_power / fz,
+              "energy_balance_rel_diff": ST.require_energy_balance(self.name, drag, q["dissipated_power_W"], speed),
+              "vertical_force_N": fz, "effective_rolling_radius_m": speed / omega, "spin_rad_per_s": omega,
+              "deflection_m": -float(lv["q"][2]), "speed_m_per_s": speed, "load_N": load}
+        q = self._target(load, q)
+        checks |= {"vertical_force_vs_load_rel_error": abs(fz - load) / load,
+                   "hub_vs_contact_force_x_N": abs(float(lv["tire_on_rim"][0]) - float(lv["contact_force"][0]))}
+        lvs = jax.tree_util.tree_map(np.asarray, out["levels"])
+        sig = {"level": np.arange(len(names)), "vertical_force_N": lvs["contact_force"][:, 2],
+               "drag_N": -lvs["tire_on_rim"][:, 0], "spin_rad_per_s": lvs["omega"], "rim_z_m": lvs["q"][:, 2],
+               "lost_power_W": lvs["power_rubber"] + lvs["power_contact_damping"] + lvs["power_friction"]}
+        info |= {"level_names": names, "steady_subpoints": self.subpoints}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)

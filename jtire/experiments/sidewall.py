@@ -35,10 +35,9 @@ from ..schema import Field
 from ..state import TireState
 from .base import Experiment
 from .decay import decay_checks, decay_names, decay_quantities, release_branch, sample_times
-from .footprint import run_info
 from .loads import RIM_LOCKED
 from .phases import FAR, flat_road, make_drive
-from .program import Phase, check_phase, f64, phase, run_plan
+from .program import Phase, check_phase, f64, phase, run_info, run_plan
 from .result import ExperimentResult
 
 ZERO6 = np.zeros(6)

@@ -13,13 +13,11 @@ import numpy as np
 
 from .. import units as U
 from ..schema import Field
-from .cornering import lateral_sae
-from .loads import DOWN, RIM_Z_SPIN
+from .loads import DOWN, RIM_Z_SPIN, lateral_sae
 from .phases import flat_road, make_drive
 from .program import Phase, f64
 from .result import ExperimentResult
-from .rolling import ROLLING_SCHEMA, Rolling
-from .stages import road_velocity, rolling_plan
+from .stages import ROLLING_SCHEMA, Rolling, road_velocity, rolling_plan
 
 
 PER_SPEED = ("F_y_steady_SAE_N", "M_z_steady_SAE_Nm", "s63_m", "overshoot", "F_y_tail_drift_rel")  # + _<speed>

@@ -23,18 +23,20 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import signals, solve
+from .. import signals
 from .. import units as U
 from ..errors import ConfigError
 from ..physics.drum import FreeDrum
 from ..schema import Field, check_range_pair
 from ..state import TireState
 from .base import Experiment
-from .footprint import contact_check, run_info
 from .loads import DOWN, RIM_SPIN, RIM_Z
 from .patch import surface_gap, x_range_traced
 from .phases import first_contact_height, make_drive, with_spin
-from .program import Phase, check_phase, f64, phase, phase_checks, require_equilibrium, run_plan
+from .program import Phase, check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info, run_plan
+from . import steady as ST
+from ..equilibrium import rolling as ER
+from ..equilibrium.residual import unpack
 from .result import ExperimentResult
 
 
@@ -61,11 +63,36 @@ def _linear_range(kappa, fx, k0, tol, hi):
     return top
 
 
+def fit_slip_curve(kappa, fx, fit_range, linear_tol, raise_what):
+    """k_k (N per unit slip) of a force-slip curve: the slope over the linear part of `fit_range` (F_x
+    within linear_tol of the initial slope line) and over the whole range; the curve up to where it
+    first leaves the range (after that a driven wheel may spin up)."""
+    lo, hi = fit_range
+    order = np.argsort(kappa)
+    k_sorted, f_sorted = kappa[order], fx[order]
+    n_in = int(np.sum((kappa >= lo) & (kappa <= hi)))
+    if n_in < 3:
+        raise ConfigError(f"traction: only {n_in} points of the force-slip curve fall in fit_range_percent = "
+                          f"[{lo * 100:g}, {hi * 100:g}] (kappa reached {100 * kappa.max():.3g} %): raise {raise_what}")
+    full = signals.linear_slope(kappa, fx, (lo, hi))
+    small = (kappa >= 0) & (kappa <= min(hi, 0.02))
+    k0 = signals.linear_slope(kappa[small], fx[small]).slope if small.sum() >= 3 else full.slope
+    top = _linear_range(k_sorted, f_sorted, k0, linear_tol, hi)
+    lin = signals.linear_slope(kappa, fx, (lo, max(top, lo + 0.2 * (hi - lo))))
+    return {"k_k_N_per_slip": lin.slope, "k_k_range_lo": lin.x_lo, "k_k_range_hi": lin.x_hi, "k_k_r2": lin.r2,
+            "k_k_fit_range_N_per_slip": full.slope, "fit_range_lo": full.x_lo, "fit_range_hi": full.x_hi,
+            "fit_range_r2": full.r2, "k_k_initial_N_per_slip": float(k0)}
+
+
 class Traction(Experiment):
     name = "traction"
     study_id = "E06"
     description = "E06 longitudinal slip stiffness k_k and tread stiffness k_cx (free drum, rising wheel torque)"
     schema = {
+        "method": Field(str, default="steady", choices=("steady", "transient")),
+        "surface": Field(str, default="drum", choices=("drum", "flat")),  # steady: on the drum or a flat road
+        "slip_max_percent": Field(float, 0.01, 1, 50, 15.0, "% (steady: the largest slip solved)"),
+        "slip_levels": Field(int, 1, 3, 100, 15, "slips solved from 0 to slip_max_percent (steady)"),
         "drum_diameter_m": Field(float, 1, 0.3, 20, 3.4, "m"),
         "drum_inertia_kgm2": Field(float, 1, 1, 1e6, 5000.0, "kg m^2 (the study gives none: a 3.4 m steel road wheel)"),
         "speed_kmh": Field(float, U.KMH, 1, 150, 36.0, "km/h"),
@@ -76,13 +103,18 @@ class Traction(Experiment):
         "fit_range_percent": Field(list, 0.01, -50, 50, [0.0, 10.0], "%"),
         "linear_tol": Field(float, 1, 0.01, 1.0, 0.1, "(relative)"),
         "n_samples": Field(int, 1, 101, 4001, 601, "samples along the torque ramp"),
-    }
+    } | ST.STEADY_FIELDS
     traced_names = ()
-    quantity_names = ("k_k_N_per_slip", "k_k_range_lo", "k_k_range_hi", "k_k_r2", "k_k_fit_range_N_per_slip",
-                      "fit_range_lo", "fit_range_hi", "fit_range_r2", "k_k_initial_N_per_slip", "k_cx_N_per_m",
-                      "k_cx_fit_range_N_per_m", "contact_half_length_m", "contact_half_length_source",
-                      "effective_rolling_radius_m", "max_slip", "max_force_x_N", "peak_wheel_torque_Nm",
-                      "mean_force_z_N", "deflection_m", "drum_speed_change_rel")
+    COMMON = ("k_k_N_per_slip", "k_k_range_lo", "k_k_range_hi", "k_k_r2", "k_k_fit_range_N_per_slip",
+              "fit_range_lo", "fit_range_hi", "fit_range_r2", "k_k_initial_N_per_slip", "k_cx_N_per_m",
+              "k_cx_fit_range_N_per_m", "contact_half_length_m", "contact_half_length_source",
+              "effective_rolling_radius_m", "max_slip", "max_force_x_N", "peak_wheel_torque_Nm",
+              "mean_force_z_N", "deflection_m")
+    quantity_names = COMMON + ("free_rolling_force_x_N",)  # the default (steady) method's
+
+    @classmethod
+    def produces(cls, table):
+        return cls.quantity_names if table["method"] == "steady" else cls.COMMON + ("drum_speed_change_rel",)
 
     drum_radius: jax.Array
     drum_inertia: jax.Array
@@ -95,6 +127,11 @@ class Traction(Experiment):
     linear_tol: float = eqx.field(static=True)
     outer_radius: float = eqx.field(static=True)
     n_save: int = eqx.field(static=True)
+    method: str = eqx.field(static=True, default="transient")
+    surface: str = eqx.field(static=True, default="drum")
+    slips: tuple = eqx.field(static=True, default=())  # steady: the longitudinal slips solved
+    subpoints: int = eqx.field(static=True, default=8)
+    load_levels: int = eqx.field(static=True, default=2)
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):
@@ -103,9 +140,60 @@ class Traction(Experiment):
                    speed=f64(table["speed_kmh"]), spin_up=f64(table["spin_up_s"]), free=f64(table["free_s"]),
                    ramp=f64(table["ramp_s"]), torque_over_load=f64(table["torque_over_load"]), fit_range=fr,
                    linear_tol=float(table["linear_tol"]), outer_radius=float(tire_spec.geometry.outer_radius),
-                   n_save=int(table["n_samples"]))
+                   n_save=int(table["n_samples"]), method=table["method"], surface=table["surface"],
+                   slips=tuple(float(v) for v in np.linspace(0.0, table["slip_max_percent"], table["slip_levels"] + 1)),
+                   subpoints=ST.check_subpoints(cls.name, table, tire_spec), load_levels=int(table["steady_load_levels"]))
+
+    def road(self):
+        return ER.Road("drum", float(self.drum_radius)) if self.surface == "drum" else ER.Road()
+
+    def _simulate_steady(self, model, params, case):
+        """Loaded free rolling on the drum (or road) at the surface speed, then each slip with the wheel's
+        spin prescribed: Omega = (1 + kappa) Omega_free, the drum (road) speed held."""
+        path = ST.loaded(model, params, case, self.road(), self.speed, subpoints=self.subpoints,
+                         n_load=self.load_levels, outer_radius=self.outer_radius)
+        n = len(path.obs)
+        w_free = path.q[4]
+        x = unpack(model, path.u, False)[0]
+        state = eqx.tree_at(lambda y: (y.x, y.q), TireState.at_rest(model, 0), (x, path.q.at[4].set(0.0)))
+        surface = self.road().surface(path.height, ER.road_velocity(self.speed))
+        x_rear, x_front = x_range_traced(model, state, surface_gap(surface))
+        obs = [path.obs[-1]]
+        for k in self.slips[1:]:
+            setup = ER.setup_of(case.pressure, surface, omega=(1 + k) * w_free, rim_free=ER.LOADED_SPIN_HELD,
+                                load=case.load, subpoints=self.subpoints)
+            obs.append(path.level(setup, f"slip {100 * k:.3g} %"))
+        out = ST.stacked(path, range(n))
+        return out | {"slips": jax.tree_util.tree_map(lambda *a: jnp.stack(a), *obs), "a": 0.5 * (x_front - x_rear),
+                      "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"]}
+
+    def _reduce_steady(self, tire, condition, out):
+        load, V = condition["load_N"], float(self.speed)
+        checks, info = ST.summary(self.name, out["infos"], ST.level_names(self.load_levels))
+        ST.summary(self.name, out["sweep_infos"], [f"slip {100 * k:.3g} %" for k in self.slips[1:]])
+        sl = jax.tree_util.tree_map(np.asarray, out["slips"])
+        kappa = np.asarray(self.slips)
+        fx, fz, w = sl["contact_force"][:, 0], sl["contact_force"][:, 2], sl["omega"]
+        fit = fit_slip_curve(kappa, fx, self.fit_range, self.linear_tol, "slip_max_percent")
+        a = float(out["a"])
+        q = fit | {"k_cx_N_per_m": fit["k_k_N_per_slip"] / a, "k_cx_fit_range_N_per_m": fit["k_k_fit_range_N_per_slip"] / a,
+                   "contact_half_length_m": a, "contact_half_length_source": f"{self.surface} (free rolling)",
+                   "effective_rolling_radius_m": V / float(w[0]), "max_slip": float(kappa.max()),
+                   "max_force_x_N": float(fx.max()), "peak_wheel_torque_Nm": float(np.max(-sl["tire_on_rim"][:, 4])),
+                   "mean_force_z_N": float(fz.mean()), "deflection_m": -float(sl["q"][0, 2]),
+                   "free_rolling_force_x_N": float(fx[0])}
+        checks |= {"force_z_vs_load_max_rel": float(np.max(np.abs(fz - load)) / load)}
+        info |= {"surface": self.surface, "surface_speed_m_s": V, "steady_subpoints": self.subpoints,
+                 "slip_definition": "kappa = Omega / Omega_free - 1 at the surface speed held (R_e from free rolling)"}
+        if self.surface == "drum":
+            info["drum_radius_m"] = float(self.drum_radius)
+        sig = {"slip": kappa, "force_x_N": fx, "force_z_N": fz, "wheel_spin_rad_s": w,
+               "wheel_torque_Nm": -sl["tire_on_rim"][:, 4]}
+        return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
 
     def simulate(self, model, params, case):
+        if self.method == "steady":
+            return self._simulate_steady(model, params, case)
         proto, R_d, I_d, V = self.proto, self.drum_radius, self.drum_inertia, self.speed
         f_rim = case.load * DOWN
 
@@ -149,6 +237,8 @@ class Traction(Experiment):
 
     def reduce(self, tire, condition, outputs):
         out = outputs[0]
+        if self.method == "steady":
+            return self._reduce_steady(tire, condition, out)
         model, load = tire.model, condition["load_N"]
         names = ("inflate", "load", "spin-up", "free rolling", "drive")
         ph = [phase(out["phases"], i) for i in range(5)]
@@ -167,25 +257,9 @@ class Traction(Experiment):
         w_wheel, w_drum = dr["qd"][:, 4], -dr["drum"][:, 1]  # drum speed as a positive surface-speed rate
         kappa = (w_wheel * R_e - w_drum * R_d) / (w_drum * R_d)
         fx, fz = dr["contact_force"][:, 0], dr["contact_force"][:, 2]
-        lo, hi = self.fit_range
-        # the curve up to where it first leaves the fit range (after that the wheel may spin up)
-        order = np.argsort(kappa)
-        k_sorted, f_sorted = kappa[order], fx[order]
-        n_in = int(np.sum((kappa >= lo) & (kappa <= hi)))
-        if n_in < 3:
-            raise ConfigError(f"traction: only {n_in} samples of the torque ramp fall in fit_range_percent = "
-                              f"[{lo * 100:g}, {hi * 100:g}] (kappa reached {100 * kappa.max():.3g} %): raise "
-                              f"torque_over_load or n_samples")
-        full = signals.linear_slope(kappa, fx, (lo, hi))
-        small = (kappa >= 0) & (kappa <= min(hi, 0.02))
-        k0 = signals.linear_slope(kappa[small], fx[small]).slope if small.sum() >= 3 else full.slope
-        top = _linear_range(k_sorted, f_sorted, k0, self.linear_tol, hi)
-        lin = signals.linear_slope(kappa, fx, (lo, max(top, lo + 0.2 * (hi - lo))))
+        fit = fit_slip_curve(kappa, fx, self.fit_range, self.linear_tol, "torque_over_load or n_samples")
         a = mem["a"]
-        q = {"k_k_N_per_slip": lin.slope, "k_k_range_lo": lin.x_lo, "k_k_range_hi": lin.x_hi, "k_k_r2": lin.r2,
-             "k_k_fit_range_N_per_slip": full.slope, "fit_range_lo": full.x_lo, "fit_range_hi": full.x_hi,
-             "fit_range_r2": full.r2, "k_k_initial_N_per_slip": float(k0),
-             "k_cx_N_per_m": lin.slope / a, "k_cx_fit_range_N_per_m": full.slope / a,
+        q = fit | {"k_cx_N_per_m": fit["k_k_N_per_slip"] / a, "k_cx_fit_range_N_per_m": fit["k_k_fit_range_N_per_slip"] / a,
              "contact_half_length_m": a, "contact_half_length_source": "drum (loaded state)",
              "effective_rolling_radius_m": R_e, "max_slip": float(kappa.max()), "max_force_x_N": float(fx.max()),
              "peak_wheel_torque_Nm": mem["torque"], "mean_force_z_N": float(fz.mean()), "deflection_m": mem["defl"],

@@ -24,8 +24,8 @@ from .. import units as U
 from ..errors import ConfigError
 from ..schema import Field, check_range_pair
 from .base import Experiment
-from .footprint import contact_check, loaded_plan, run_info
-from .program import check_phase, f64, phase, phase_checks, require_equilibrium
+from .phases import loaded_plan
+from .program import check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info
 from .result import ExperimentResult
 from .static_path import STATIC_LOADS, check_static_path, static_summary, static_vertical_path
 

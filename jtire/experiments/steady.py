@@ -1,0 +1,124 @@
+"""Steady rolling in the experiments (E06, E10, E12 with method = "steady", the default).
+
+The tire is inflated, touched down and loaded at the rolling speed (`equilibrium.rolling`), then
+solved at each operating point (a slip angle, a longitudinal slip) by continuation from the last:
+every level a steady-rolling equilibrium, nothing integrated in time, so there is no settling to
+tune and no ripple to average. What a level reports (`equilibrium.rolling.observe`) is stacked per
+level; the reductions read the last loaded level and the operating points.
+"""
+
+import jax
+import numpy as np
+
+from .. import equilibrium as EQ
+from ..equilibrium import rolling as ER
+from ..errors import SimulationError
+from ..schema import Field
+
+# Fields every steady experiment's table has. 8 points per segment: measured on the default tire at
+# 38.7 kN, E12's drag and lost power change by 1.1 % and 3.3 % from 8 to 16 (bench_steady.py).
+STEADY_FIELDS = {
+    "steady_subpoints": Field(int, 1, 2, 32, 8, "contact points per segment along the streamlines (steady)"),
+    "steady_load_levels": Field(int, 1, 1, 12, 2, "load levels of the steady loading at speed"),
+}
+# The two readings of the loss (hub force, lost power over speed) differ by the discretization of the
+# flow (docs/steady-rolling.md: 2.6 % on the default mesh, 7.4 % on a 32-segment ring); beyond this the
+# flow is too coarse for either reading and the result is an error.
+ENERGY_BALANCE_TOL = 0.10
+
+
+def check_subpoints(name, table, tire_spec):
+    """The steady contact sampling must refine the tire's own (a whole multiple of it)."""
+    from ..errors import ConfigError
+
+    k, own = int(table["steady_subpoints"]), int(tire_spec.contact_subpoints)
+    if k % own:
+        raise ConfigError(f"{name}.steady_subpoints = {k}: must be a multiple of the tire's mesh.contact_subpoints "
+                          f"= {own}")
+    return k
+
+
+def omega_guess(outer_radius, speed):
+    """A first spin (rad/s) for the levels before the load carries the tire: R0 less 1 cm."""
+    return speed / (outer_radius - 0.01)
+
+
+def loaded(model, params, case, road, speed, *, subpoints, n_load, outer_radius, slip_angle=0.0):
+    """The free-rolling loaded path at `speed` (a `equilibrium.rolling.Path`)."""
+    return ER.loaded_rolling(model, params, case.pressure, case.load, road, speed, n_load=n_load,
+                             slip_angle=slip_angle, omega0=omega_guess(outer_radius, speed), subpoints=subpoints)
+
+
+def stacked(path, indices=None) -> dict:
+    """The path's level observations and Newton infos stacked (leading axis: level), as arrays."""
+    idx = range(len(path.obs)) if indices is None else indices
+    stack = lambda items: jax.tree_util.tree_map(lambda *a: jax.numpy.stack(a), *[items[i] for i in idx])  # noqa: E731
+    return {"levels": stack(path.obs), "infos": stack(path.infos)}
+
+
+def level_names(n_load: int) -> list:
+    return ["inflation", "first contact"] + [f"load {k}/{n_load}" for k in range(1, n_load + 1)]
+
+
+def summary(where, infos, names) -> tuple:
+    """(checks, info) of solved levels (Newton infos stacked per level, host arrays) named `names` (a
+    list, or a callable level index -> name); raises SimulationError naming the first level that did
+    not converge."""
+    infos = jax.tree_util.tree_map(np.asarray, infos)
+    name = names if callable(names) else (lambda k: names[k])
+    EQ.check_static(infos, lambda k: f"{where}: steady rolling, {name(k)}")
+    checks = {"steady_converged": bool(np.all(infos.converged)),
+              "steady_residual_max_rel": float(np.max(infos.residual_max / infos.load_scale))}
+    info = {"method": "steady", "levels": int(len(infos.converged)), "newton_iterations": int(infos.iterations.sum()),
+            "factorizations": int(infos.factorizations.sum()), "krylov_iterations": int(infos.krylov.sum())}
+    return checks, info
+
+
+def losses(level) -> dict:
+    """The lost powers (W) of one level: Maxwell branches, tread normal damping, sliding, in all."""
+    rub, damp, fric = (float(level[k]) for k in ("power_rubber", "power_contact_damping", "power_friction"))
+    return {"viscoelastic_power_W": rub, "tread_damping_power_W": damp, "rubber_power_W": rub + damp,
+            "friction_power_W": fric, "dissipated_power_W": rub + damp + fric}
+
+
+def require_energy_balance(where, drag, power, speed, tol=ENERGY_BALANCE_TOL) -> float:
+    """Relative difference of the hub drag and the lost power over the speed; SimulationError beyond tol."""
+    ref = power / speed
+    if ref <= 0:
+        return 0.0
+    diff = (drag - ref) / ref
+    if not abs(diff) <= tol:
+        raise SimulationError(f"{where}: the hub drag {drag:.4g} N and the lost power over the speed {ref:.4g} N "
+                              f"differ by {100 * diff:+.2f} % (tolerance {100 * tol:g} %): the flow is under-resolved; "
+                              f"raise steady_subpoints or the mesh's n_theta")
+    return diff
+
+
+def level(out, k) -> dict:
+    """Level k's observations (host numpy)."""
+    return jax.tree_util.tree_map(lambda a: np.asarray(a)[k], out["levels"])
+
+
+MAX_ANGLE_STEP = 2.0 * np.pi / 180  # rad: continuation steps in slip angle (past the peak the force saturates)
+
+
+def slip_angle_sweep(path, angles, speed, load, *, subpoints, max_step=MAX_ANGLE_STEP) -> list:
+    """Observations at each SAE slip angle of `angles` (rad, any order), continued from the loaded
+    free-rolling state of `path` at 0: outwards through the positive angles, then again from 0 through
+    the negative ones, in steps of at most `max_step` (the levels between are solved loosely, not
+    reported). Returns one observation dict per angle, in the order given."""
+    start = (path.u, path.P, path.valid)
+    out = {}
+    for sign in (1.0, -1.0):
+        path.u, path.P, path.valid = start
+        prev = 0.0
+        for a in sorted((float(v) for v in angles if v * sign > 0 or (v == 0 and sign > 0)), key=abs):
+            n = max(1, int(np.ceil(abs(a - prev) / max_step - 1e-9)))
+            for j in range(1, n + 1):
+                b = prev + (a - prev) * j / n
+                setup = ER.setup_of(path.pressure, path.road.surface(path.height, ER.road_velocity(speed, b)),
+                                    omega=path.q[4], rim_free=ER.LOADED, load=load, subpoints=subpoints)
+                ob = path.level(setup, f"slip angle {np.degrees(b):.3g} deg", loose=j < n)
+            out[a] = ob
+            prev = a
+    return [out[float(a)] for a in angles]
