@@ -97,7 +97,7 @@ def test_lossless_free_rolling_drags_only_by_its_sliding(coarse_tire, e12_steady
     """No rubber loss and no tread damping: what is left is the tread's shear, built up along the patch
     and let go where the pressure falls at its rear edge (friction cannot hold it at zero normal force,
     whatever mu). The drag is then that sliding loss over the speed, to the discretization error of the
-    flow's energy balance (the 10 % of the lossy tire's drag that E12 allows; measured 6.4 N against
+    flow's energy balance (10 % of the lossy tire's drag; measured 6.4 N against
     3.8 N, 1.4 % of it), and a few percent of the lossy tire's drag (measured 3.4 %)."""
     path = _loaded(coarse_tire, coarse_tire.params.without_damping())
     path.check("lossless")
@@ -122,7 +122,7 @@ def test_steady_state_is_path_independent(coarse_tire, e12_steady):
 
 def test_e12_steady_energy_and_rolling_radius(e12_steady, e12, coarse_tire):
     """E12's two readings of one loss agree to the flow's discretization (checked by the experiment
-    itself at 10 %; measured 7 % on this 32-segment ring, 2.6 % on the default mesh), the hub force is
+    itself at 15 %; here to 10 %: measured 7 % on this 32-segment ring, 2.6 % on the default mesh), the hub force is
     the contact's (steady: no momentum is stored), free rolling slides little (the tread sticks through
     the patch: sliding < 10 % of the loss), and the effective rolling radius lies between the loaded
     radius and the free one, near the classic R0 - d/3 (within 1 % of R0)."""
@@ -189,10 +189,11 @@ GRAD_NAMES = ("parts.crown.loss", "tread.G", "parts.mid_sidewall.E_meridional")
 
 
 @pytest.mark.slow
+@pytest.mark.gate
 def test_implicit_derivatives_match_central_differences(coarse_tire):
     """d(drag, F_y, M_z, F_x at the hub) / d ln(crown loss, tread G, mid-sidewall E_meridional) at 2 deg
-    of slip through one steady solve, forward mode (jacfwd) and reverse mode (jacrev, lineax's
-    transposed GMRES), against central differences of solves converged to 1e-11 of the load scale
+    of slip through one steady solve, forward mode (jacfwd) and reverse mode (jacrev: the transposed
+    restarted GMRES of `steady.implicit_solve`), against central differences of solves converged to 1e-11 of the load scale
     (step 1e-3 in ln p: truncation ~1e-6 relative, solver noise ~1e-8 N / 1e-3): each entry within
     1e-4 of its row's largest, and forward = reverse to 1e-6. Slow: compiling the forward and the
     reverse programs takes ~4 minutes here."""

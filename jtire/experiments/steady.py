@@ -22,9 +22,10 @@ STEADY_FIELDS = {
     "steady_load_levels": Field(int, 1, 1, 12, 2, "load levels of the steady loading at speed"),
 }
 # The two readings of the loss (hub force, lost power over speed) differ by the discretization of the
-# flow (docs/steady-rolling.md: 2.6 % on the default mesh, 7.4 % on a 32-segment ring); beyond this the
-# flow is too coarse for either reading and the result is an error.
-ENERGY_BALANCE_TOL = 0.10
+# flow: on the default mesh 0.4-10.9 % over the 3 x 3 grid, largest where the patch spans fewest
+# segments (docs/steady-rolling.md). Beyond this the flow is too coarse for either reading and the
+# result is an error.
+ENERGY_BALANCE_TOL = 0.15
 
 
 def check_subpoints(name, table, tire_spec):
