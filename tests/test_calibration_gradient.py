@@ -24,6 +24,7 @@ TOL = 1e-4
 
 
 @pytest.mark.slow
+@pytest.mark.gate
 def test_static_deflection_jacobian_matches_central_differences():
     from jtire import batch
     from jtire.calibration.shell import ShellSimulator, traced_jacobian
@@ -73,7 +74,7 @@ def test_reverse_mode_through_rolling_matches_forward_mode_and_central_differenc
     from jtire.experiments import Case
     from jtire.tire import make_tire
 
-    short = ["rolling_resistance.settle_s=0.02", "rolling_resistance.ramp_s=0.02",
+    short = ["rolling_resistance.method=transient", "rolling_resistance.settle_s=0.02", "rolling_resistance.ramp_s=0.02",
              "rolling_resistance.release_s=0.01", "rolling_resistance.measure_s=0.03"]
     rc = load_run_config(REPO / "configs" / "experiments" / "rolling_resistance.toml", COARSE_SET + short)
     tire = make_tire(rc.tire)

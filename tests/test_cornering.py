@@ -182,8 +182,8 @@ def test_antisymmetry_on_the_default_tire(spec, protocol):
     from .conftest import RATED, make_experiment
 
     tire = make_tire(spec)
-    exp = make_experiment("cornering", protocol, spec, slip_angles_deg=[-2.0, 0.0, 1.0, 2.0], km_range_deg=[0.0, 2.0],
-                          settle_s=0.1, ramp_s=0.03, release_s=0.01, measure_s=0.02)
+    exp = make_experiment("cornering", protocol, spec, method="transient", slip_angles_deg=[-2.0, 0.0, 1.0, 2.0],
+                          km_range_deg=[0.0, 2.0], settle_s=0.1, ramp_s=0.03, release_s=0.01, measure_s=0.02)
     n0 = batch.program_traces()
     (r,) = batch.run(exp, tire, [RATED])
     r = ok(r)
@@ -193,7 +193,8 @@ def test_antisymmetry_on_the_default_tire(spec, protocol):
     assert fy[0] == pytest.approx(-fy[3], rel=TOL_ANTISYM)
     assert mz[0] == pytest.approx(-mz[3], rel=TOL_ANTISYM)
     # a second sweep of the same size, other angles and load: no new trace, no new compilation
-    exp2 = make_experiment("cornering", protocol, spec, slip_angles_deg=[0.0, 1.0, 3.0, 4.0], settle_s=0.01,
+    exp2 = make_experiment("cornering", protocol, spec, method="transient", slip_angles_deg=[0.0, 1.0, 3.0, 4.0],
+                           settle_s=0.01,
                            ramp_s=0.01, release_s=0.005, measure_s=0.005, kf_range_deg=[0.0, 4.0], km_range_deg=[0.0, 4.0])
     n1 = batch.program_traces()
     batch.run(exp2, tire, [dict(RATED, load_N=0.8 * RATED["load_N"])])

@@ -233,6 +233,7 @@ def test_inflation_matches_the_settled_transient(statics, transients, coarse_tir
 
 
 @pytest.mark.slow
+@pytest.mark.gate
 def test_loaded_deflection_matches_the_settled_transient(statics, transients):
     k = 1 + len(LEVELS)  # level 0 inflation, 1 the touch
     assert float(statics.rim_force[k, 2]) == pytest.approx(-LOAD)
@@ -242,6 +243,7 @@ def test_loaded_deflection_matches_the_settled_transient(statics, transients):
 
 
 @pytest.mark.slow
+@pytest.mark.gate
 def test_lateral_deflection_matches_the_settled_transient(statics, transients):
     k = 1 + len(LEVELS)
     y_static = float(statics.q[-1, 1] - statics.q[k, 1])

@@ -38,6 +38,7 @@ def _run(args, **kw):
 
 
 @pytest.mark.slow
+@pytest.mark.gate
 def test_wheel_installs_and_runs(tmp_path):
     wheels = tmp_path / "wheels"
     _run([sys.executable, "-m", "pip", "wheel", REPO, "--no-deps", "-q", "-w", wheels], timeout=600)

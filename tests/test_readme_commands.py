@@ -37,6 +37,9 @@ COVERED = {
     r"jtire run configs/experiments/vertical_stiffness\.toml --set condition\.pressure_psi=70": "test_run_set_condition",
     r"jtire run configs/experiments/footprint\.toml --set tire\.mesh\.n_theta=48": "test_run_set_tire_mesh",
     r"jtire sweep configs/experiments/footprint\.toml --out runs/grid": "test_sweep_grid",
+    r"jtire run configs/experiments/(rolling_resistance|cornering)\.toml": "test_run_steady",
+    r"jtire run configs/experiments/rolling_resistance\.toml --set rolling_resistance\.method=transient":
+        "test_run_steady",
     r"jtire run configs/experiments/lateral_stiffness\.toml --frames 5 --out runs/e09": "test_frames_and_vtk",
     r"jtire export-vtk runs/e09": "test_frames_and_vtk",
     r"jtire characterize --out runs/characterize": "test_characterize",
@@ -183,6 +186,27 @@ def test_run_set_tire_mesh(user_dir, capsys, e01_grid):
     assert "contact_length_m" in capsys.readouterr().out
 
 
+def test_run_steady(user_dir, capsys, e12_steady, e12):
+    """E12 and E10 by the default steady solve, and E12 as a transient. E12 is the in-process steady
+    run's case (41.4 kN, 120 psi; same program): the same drag. E10 at its config's 10 angles, the
+    transient at the suite's short stages (each config's own stages are minutes on the coarse ring; the
+    stage lengths change the settling, not what the command does)."""
+    assert jtire("jtire run configs/experiments/rolling_resistance.toml", *QUICK_SIM) == 0
+    out = capsys.readouterr().out
+    drag = float(next(ln.split()[1] for ln in out.splitlines() if ln.split()[:1] == ["rolling_resistance_N"]))
+    assert drag == pytest.approx(ok(e12_steady.results[0]).quantities["rolling_resistance_N"], rel=1e-5)
+    assert "True   (steady" in out
+    assert jtire("jtire run configs/experiments/cornering.toml", *QUICK_SIM) == 0
+    out = capsys.readouterr().out
+    assert "k_f_N_per_rad" in out and "True   (steady" in out
+    short = [a for s in ("settle_s=0.02", "ramp_s=0.02", "release_s=0.01", "measure_s=0.03")
+             for a in ("--set", f"rolling_resistance.{s}")]
+    assert jtire("jtire run configs/experiments/rolling_resistance.toml --set rolling_resistance.method=transient",
+                 *QUICK_SIM, *short) == 0
+    out = capsys.readouterr().out
+    assert "rolling_resistance_stderr_N" in out and "settled" in out
+
+
 def test_sweep_grid(user_dir, capsys, e01_grid):
     """The 3 x 3 grid shrunk to 2 x 2 (4 cases on 2 devices: the suite's grid program)."""
     assert jtire("jtire sweep configs/experiments/footprint.toml --out runs/grid", *QUICK_SIM, *GRID_2X2) == 0
@@ -222,6 +246,23 @@ def test_frames_and_vtk(user_dir, capsys, e01_grid):
     assert jtire("jtire export-vtk runs/e09") == 0
     assert f"wrote {n} frames" in capsys.readouterr().out
     assert len(list((run / "vtk").glob("*.vtu"))) == n and len(list((run / "vtk").glob("*.pvd"))) == 1
+
+
+@pytest.mark.slow
+@pytest.mark.gate
+def test_characterize_one_condition_validated(user_dir, capsys):
+    """The physics gate's characterization: `jtire characterize` on the coarse ring at the rated
+    condition alone, short stages, with its validation: every experiment's case, the tables, a `.tir`
+    that names the rigid-ring keys, and the rigid ring compared with the shell (the comparison's
+    verdicts are issue 28's; here: that it ran and wrote its table)."""
+    small = ["--set", "grid.loads_kg=[4625.0]", "--set", "grid.pressures_psi=[120.0]", *QUICK_SIM]
+    assert jtire("jtire characterize --out runs/characterize", *small) == 0
+    out = user_dir / "runs" / "characterize"
+    tir = (out / "tire.tir").read_text()
+    assert "[INERTIA]" in tir and "FNOMIN" in tir
+    char = json.loads((out / "characterization.json").read_text())
+    assert char
+    assert "| metric | shell | ring |" in (out / "validation.md").read_text()
 
 
 @pytest.mark.slow

@@ -185,7 +185,7 @@ def e12_default(spec, protocol):
     from .conftest import make_experiment
 
     tire = make_tire(spec)
-    exp = make_experiment("rolling_resistance", protocol, spec)
+    exp = make_experiment("rolling_resistance", protocol, spec, method="transient")
     cache = {}
 
     def run(load, lossless=False):
@@ -207,6 +207,7 @@ LOSSLESS_FRACTION = 0.1  # without rubber losses only the friction slip (~5 N) a
 
 
 @pytest.mark.slow
+@pytest.mark.gate
 def test_energy_balance(e12_default):
     q = e12_default(E12_LOAD)
     assert q["vertical_force_vs_load_rel_error"] < 0.01  # the held load carries through to the road
@@ -234,3 +235,26 @@ def test_drag_rises_with_load(e12_default):
     assert hi["rolling_resistance_from_power_N"] > 1.2 * lo["rolling_resistance_from_power_N"]
     assert hi["rolling_resistance_N"] - lo["rolling_resistance_N"] > N_SIGMA * np.hypot(
         hi["rolling_resistance_stderr_N"], lo["rolling_resistance_stderr_N"])
+
+
+# The steady solve (the default) against the settled transient on the default mesh, where the README's
+# figures come from. The lost power over the speed is the steadier reading of the transient (its hub
+# force carries the polygon's ripple): the steady one agrees to 3 % (the goal; measured -0.7 %
+# at 38.7 kN). The steady hub drag is the other reading of the same discretized flow, apart from its
+# own lost power by up to a few percent on this mesh (docs/steady-rolling.md): against the transient's
+# hub drag to 5 % plus 3 of its standard errors (measured -3.6 % at 38.7 kN).
+@pytest.mark.slow
+@pytest.mark.gate
+def test_steady_agrees_with_the_settled_transient(e12_default, spec, protocol):
+    from jtire import batch
+    from jtire.tire import make_tire
+
+    from .conftest import make_experiment
+
+    exp = make_experiment("rolling_resistance", protocol, spec, method="steady")
+    (res,) = batch.run(exp, make_tire(spec), [{"pressure_Pa": P_RATED, "load_N": E12_LOAD}], devices=1)
+    s, t = ok(res).quantities, e12_default(E12_LOAD)
+    assert s["rolling_resistance_from_power_N"] == pytest.approx(t["rolling_resistance_from_power_N"], rel=0.03)
+    tol = 0.05 * t["rolling_resistance_N"] + N_SIGMA * t["rolling_resistance_stderr_N"]
+    assert abs(s["rolling_resistance_N"] - t["rolling_resistance_N"]) <= tol
+    assert s["spin_rad_per_s"] == pytest.approx(t["spin_rad_per_s"], rel=2e-3)  # measured 0.07 %
