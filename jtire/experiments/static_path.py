@@ -50,13 +50,14 @@ def static_vertical_path(model, params, pressure, loads, lateral=None):
     return _static_path_jit(model, params, pressure, loads, lateral)
 
 
-def static_summary(*infos):
+def static_summary(*infos, method="static"):
     """(checks, info) of one or more solved level sequences (StaticInfo, host arrays): converged at
-    every level, the largest residual relative to the load scale, and the solver's work."""
+    every level, the largest residual relative to the load scale, and the solver's work; the keys
+    named after `method` (the steady-rolling levels share the solver and its infos)."""
     arr = lambda f: np.concatenate([np.atleast_1d(np.asarray(getattr(i, f))) for i in infos])  # noqa: E731
-    checks = {"static_converged": bool(np.all(arr("converged"))),
-              "static_residual_max_rel": float(np.max(arr("residual_max") / arr("load_scale")))}
-    info = {"method": "static", "newton_iterations": int(arr("iterations").sum()),
+    checks = {f"{method}_converged": bool(np.all(arr("converged"))),
+              f"{method}_residual_max_rel": float(np.max(arr("residual_max") / arr("load_scale")))}
+    info = {"method": method, "newton_iterations": int(arr("iterations").sum()),
             "factorizations": int(arr("factorizations").sum()), "krylov_iterations": int(arr("krylov").sum())}
     return checks, info
 

@@ -14,6 +14,7 @@ from .. import equilibrium as EQ
 from ..equilibrium import rolling as ER
 from ..errors import SimulationError
 from ..schema import Field
+from .static_path import static_summary
 
 # Fields every steady experiment's table has. 8 points per segment: measured on the default tire at
 # 38.7 kN, E12's drag and lost power change by 1.1 % and 3.3 % from 8 to 16 (bench_steady.py).
@@ -68,11 +69,8 @@ def summary(where, infos, names) -> tuple:
     infos = jax.tree_util.tree_map(np.asarray, infos)
     name = names if callable(names) else (lambda k: names[k])
     EQ.check_static(infos, lambda k: f"{where}: steady rolling, {name(k)}")
-    checks = {"steady_converged": bool(np.all(infos.converged)),
-              "steady_residual_max_rel": float(np.max(infos.residual_max / infos.load_scale))}
-    info = {"method": "steady", "levels": int(len(infos.converged)), "newton_iterations": int(infos.iterations.sum()),
-            "factorizations": int(infos.factorizations.sum()), "krylov_iterations": int(infos.krylov.sum())}
-    return checks, info
+    checks, info = static_summary(infos, method="steady")
+    return checks, info | {"levels": int(len(infos.converged))}
 
 
 def losses(level) -> dict:
