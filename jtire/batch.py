@@ -12,7 +12,7 @@ stable step of each case, runs the cases in batches (padded to a multiple of the
 reduces every condition on the host as soon as its batch returns and hands each result to a
 callback (so sweeps save as they go). On a CPU the devices are host devices: `jtire` asks JAX for
 one per core at import (`JTIRE_CPU_DEVICES` overrides). On a GPU it runs unchanged over
-`jax.devices()`. Several hosts (`jax.distributed`) are not supported: see the README.
+`jax.devices()`. Several hosts (`jax.distributed`) are not supported: see docs/experiments.md.
 """
 
 import contextlib

@@ -1,4 +1,4 @@
-"""Every command the README shows is run by a test here, as a user runs it, with coarse and short
+"""Every command the README (and the documentation pages in docs/) shows is run by a test here, as a user runs it, with coarse and short
 overrides appended (the coarse ring and the suite's protocol: the programs the other tests compiled).
 
 `test_every_readme_command_is_covered` extracts the commands from README.md (code blocks and inline
@@ -25,6 +25,7 @@ from jtire.config import load_run_config
 from .conftest import COARSE_SET, REPO, SOLVER_SET, ok
 
 README = REPO / "README.md"
+DOCS = sorted((REPO / "docs").glob("*.md"))  # the README's pages: their commands are the README's too
 QUICK_SIM = [a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)]
 GRID_2X2 = ["--set", "sweep.loads_kg=[2312.5, 4625.0]", "--set", "sweep.pressures_psi=[120.0, 150.0]"]
 
@@ -87,7 +88,7 @@ def readme_commands(text: str) -> list:
 
 
 def test_every_readme_command_is_covered():
-    commands = readme_commands(README.read_text())
+    commands = list(dict.fromkeys(c for page in [README, *DOCS] for c in readme_commands(page.read_text())))
     assert any(c.startswith("jtire run") for c in commands)  # the extraction finds commands at all
     missing = [c for c in commands if not any(re.fullmatch(p, c) for p in EXCLUDED)
                and not any(re.fullmatch(p, c) for p in COVERED)]
