@@ -20,7 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import batch
+from .. import batch, cache
 from .. import units as U
 from ..config import parse_solver
 from ..experiments import REGISTRY, Case, Protocol
@@ -220,6 +220,7 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: s
     mode "forward": jax.jacfwd (d tangents carried along one run; stores nothing). "reverse":
     jax.jacrev with every transient phase checkpointed (`experiments.program.reverse_mode`): one
     backward sweep per quantity, whatever d is."""
+    cache.release_programs_if_crowded()  # every Jacobian compiles programs of its own
     if (mode == "reverse" or not exp.shardable) and len(conditions) > 1:
         # one condition after another: a backward sweep of the transient E12 on the default mesh peaked
         # at 14.6 GB for one case (benchmarks/bench_gradients.py), and a vmapped Newton solve (static,

@@ -25,7 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
-from . import solve
+from . import cache, solve
 from .errors import JtireError
 from .experiments.phases import Case
 from .experiments.program import phase_traces
@@ -123,6 +123,7 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     None: with several devices and batches of one case (statics always, transients with batch = 1),
     the cases run side by side, one per device at a time. Larger transient batches take every device.
     """
+    cache.release_programs_if_crowded()  # between runs: a process holding too many programs crashes
     if hasattr(exp, "components"):  # a composite (E11): its components' results combined per condition
         subs = [run(c, tire, conditions, params_list, devices=devices, batch=batch, keep_outputs=keep_outputs)
                 for c in exp.components]

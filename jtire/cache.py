@@ -54,3 +54,54 @@ def enable(path=None):
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
     return path
+
+
+# ---- compiled programs held in memory ---------------------------------------------------------------
+# XLA on the CPU keeps every compiled program's kernels in memory maps of their own (measured: ~200 maps
+# for a 60-operation program, ~700 for a phase program), and Linux caps a process at vm.max_map_count
+# maps (65,530 by default). Past it the code loader cannot map the next program and the process dies
+# with a segmentation fault (CI did, in a physics gate that had loaded ~90 programs). So long jobs drop
+# JAX's in-memory programs when the maps near the cap; they reload from the persistent cache when needed.
+CROWDED_FRACTION = 0.7  # of vm.max_map_count: the programs of one more run or Jacobian (measured < 13,000 maps) fit
+
+
+def map_count():
+    """Memory maps of this process (Linux), or None where /proc is not there."""
+    try:
+        with open("/proc/self/maps", "rb") as f:
+            return sum(1 for _ in f)
+    except OSError:
+        return None
+
+
+def map_limit():
+    """The kernel's per-process cap on memory maps, or None where it cannot be read."""
+    try:
+        return int(Path("/proc/sys/vm/max_map_count").read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def release_programs_if_crowded(fraction: float = CROWDED_FRACTION) -> bool:
+    """Clear JAX's in-memory compiled programs when this process's memory maps pass `fraction` of the
+    kernel's cap. Returns whether it cleared them."""
+    n, cap = map_count(), map_limit()
+    if n is None or cap is None or n < fraction * cap:
+        return False
+    import gc
+
+    import jax
+
+    jax.clear_caches()
+    gc.collect()
+    _CLEARS[0] += 1
+    return True
+
+
+_CLEARS = [0]
+
+
+def clears() -> int:
+    """How many times this process dropped its in-memory programs (a program used after a clear is
+    traced again, so tests that count traces account for it)."""
+    return _CLEARS[0]

@@ -3,8 +3,8 @@ the rigid-ring tables, trend verdicts, a Magic Formula fit and an MF-Swift `.tir
 
 A characterization config (`configs/characterize.toml`) names the tire file, the experiments (default:
 all), the grid (loads in kg, pressures in psi; the study's 3 x 3 by default), the solver and any
-experiment table. Each experiment runs as batches of its grid cases through `jtire.batch` (E05, E07, E08
-once per pressure: the load does not enter; E10 at every slip angle of every condition, one case each;
+experiment table. Each experiment runs as batches of its grid cases through `jtire.batch` (E05, E07, E08,
+E13 once per pressure: the load does not enter; E10 at every slip angle of every condition, one case each;
 E11 is sigma = k_f / k_l from E10 and E09 at each condition). Every case is saved the moment its batch
 returns (`DIR/<experiment>/cases/<case>/result.json`, `signals.csv`); `DIR/settings.json` holds
 everything that determines the numbers, so a killed run resumes with nothing recomputed and a rerun with
@@ -26,7 +26,8 @@ from .io import atomic_write_csv, atomic_write_text, check_writable
 from .schema import Field
 
 DEFAULT_EXPERIMENTS = ("footprint", "vertical_stiffness", "drum_cleat", "drop_test", "inplane_rotation", "traction",
-                       "sidewall_translation", "sidewall_camber", "lateral_stiffness", "cornering", "rolling_resistance")
+                       "sidewall_translation", "sidewall_camber", "lateral_stiffness", "cornering", "rolling_resistance",
+                       "sidewall_longitudinal")
 GRID_SCHEMA = {
     "loads_kg": Field(list, U.G0, 50, 50000, [2312.5, 4625.0, 6937.5], "kg"),
     "pressures_psi": Field(list, U.PSI, 10, 250, [70.0, 120.0, 150.0], "psi"),

@@ -66,7 +66,11 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
               "drop.bounce_zeta": q["xi_fit"], "drop.peak_F_z_N": float(np.nanmax(fz)),
               "drop.belt_mode_Hz": belt}
         sig["drop_band_Hz"] = band
-        sig["drop"] = (t, s["rim_z_m"] - s["rim_z_m"][0])
+        # rim z from where the wheel rests under the load (first contact at z = -drop height, then the
+        # static deflection), time from first contact: the ring's panel is drawn the same way
+        chk = json.loads((d / "result.json").read_text())["checks"]
+        rest = -(float(chk["drop_height_m"]) + float(q["static_deflection_m"]))
+        sig["drop"] = (t - float(chk["first_contact_t_s"]), s["rim_z_m"] - rest)
     d = _case_dir(char_dir, "drum_cleat", load_N, pressure_Pa)
     if d is not None:
         q = json.loads((d / "result.json").read_text())["quantities"]

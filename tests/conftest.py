@@ -9,7 +9,7 @@ whole session (test files share them). The fast suite uses:
     the same on the second device           (grids case by case, side by side: `jtire sweep`'s default);
     flat-road program, 4 cases on 2 devices ("grids": the E01 grid, the E10 sweep);
     flat-road program, 4 cases on 1 device  (the unsharded E01 grid: sharded = unsharded);
-    rigid-belt program, 1 case on 1 device  (E05, E07, E08);
+    rigid-belt program, 1 case on 1 device  (E05, E07, E08, E13);
     drum program, 1 case on 1 device        (E03, once).
 Anything else (the default mesh, other drum runs) is under @pytest.mark.slow.
 
@@ -51,6 +51,15 @@ P_RATED, LOAD_RATED = 120 * U.PSI, 4625 * U.G0
 RATED = {"pressure_Pa": P_RATED, "load_N": LOAD_RATED}
 GRID = [{"pressure_Pa": P_RATED, "load_N": 2312.5 * U.G0}, RATED,
         {"pressure_Pa": 150 * U.PSI, "load_N": LOAD_RATED}, {"pressure_Pa": 70 * U.PSI, "load_N": LOAD_RATED}]
+
+
+@pytest.fixture(autouse=True)
+def _room_for_programs():
+    """Before every test: drop JAX's in-memory programs if this process's memory maps near the
+    kernel's cap (`jtire.cache.release_programs_if_crowded`; the library does it between runs too).
+    A test that checks trace counts sees the clears it spans in `cache.clears()`."""
+    cache.release_programs_if_crowded()
+    yield
 
 
 @pytest.fixture(scope="session")
@@ -101,6 +110,7 @@ class Run:
     devices: int  # devices the batch ran on
     order: int  # runs made before this one in the session
     table: dict = dataclasses.field(default_factory=dict)  # the experiment's table (file units)
+    clears: tuple = (0, 0)  # cache.clears() before and after the run (a clear makes the next run trace again)
 
 
 class Runs:
@@ -117,11 +127,12 @@ class Runs:
         key = (name, json.dumps(table, sort_keys=True), json.dumps(conditions, sort_keys=True), devices, id(tire))
         if key not in self.cache:
             exp = make_experiment(name, self.protocol, self.spec, **table)
-            before = batch.program_traces()
+            before, c0 = batch.program_traces(), cache.clears()
             res = batch.run(exp, tire, [dict(c) for c in conditions], devices=devices, keep_outputs=True)
             n_cases = sum(len(exp.cases(c)) for c in conditions)
             self.cache[key] = Run(exp, res, batch.program_traces() - before, before,
-                                  batch.n_devices_for(n_cases, devices), len(self.cache), dict(table))
+                                  batch.n_devices_for(n_cases, devices), len(self.cache), dict(table),
+                                  (c0, cache.clears()))
         return self.cache[key]
 
 
@@ -274,6 +285,13 @@ P_LOW = 80 * U.PSI
 def sidewall_runs(runs):
     """{name: {pressure: Run}} at 120 and 80 psi (E05, E07, E08: per pressure, no load)."""
     return {n: {p: runs(n, [{"pressure_Pa": p}], **SIDEWALL_DECAY) for p in (P_RATED, P_LOW)} for n in SIDEWALL}
+
+
+@pytest.fixture(scope="session")
+def e13_runs(runs):
+    """E13 at 120 psi pushed fore-aft (x, the default) and vertically (z): the rigid-belt program."""
+    return {d: runs("sidewall_longitudinal", [{"pressure_Pa": P_RATED}], direction=d, **SIDEWALL_DECAY)
+            for d in ("x", "z")}
 
 
 @pytest.fixture(scope="session")

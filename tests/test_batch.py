@@ -70,7 +70,7 @@ def assert_same_runs(results_a, results_b):
 def test_grid_traces_the_phase_program_once(e01_grid):
     # 2 phases (inflate, load) x 4 cases of one structure: at most one trace; exactly one when no phase
     # program was traced before in this process (the suite asks for this grid first)
-    assert e01_grid.traces_added <= 1
+    assert e01_grid.traces_added <= 1 + e01_grid.clears[1] - e01_grid.clears[0]
     if e01_grid.traces_before == 0:
         assert e01_grid.traces_added == 1
 
@@ -99,8 +99,11 @@ def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01
         # tests first, E12's one-device run follows E10's 2-device grid and the second trace lands on
         # the next one-device run): the group as a whole traces once, twice after a 2-device run
         after_sharded = key == (False, 1) and any(r.order > first_sharded for r in rs)
+        # a process that dropped its in-memory programs (jtire.cache: too many memory maps) traces
+        # again once per group after each clear
+        cleared = rs[-1].clears[1] - rs[0].clears[0]
         assert rs[0].traces_added >= 1 or rs[0].traces_before > 0, (key, rs[0].exp.name)
-        assert sum(r.traces_added for r in rs) <= (2 if after_sharded else 1), (
+        assert sum(r.traces_added for r in rs) <= (2 if after_sharded else 1) + cleared, (
             key, first_sharded, [(r.exp.name, r.order, r.traces_added) for r in rs])
 
 

@@ -176,7 +176,7 @@ def test_sweep_stiffnesses(e10, e01_static, coarse_tire):
 # ---- the default tire (slow) --------------------------------------------------------------------
 @pytest.mark.slow
 def test_antisymmetry_on_the_default_tire(spec, protocol):
-    from jtire import batch
+    from jtire import batch, cache
     from jtire.tire import make_tire
 
     from .conftest import RATED, make_experiment
@@ -196,6 +196,6 @@ def test_antisymmetry_on_the_default_tire(spec, protocol):
     exp2 = make_experiment("cornering", protocol, spec, method="transient", slip_angles_deg=[0.0, 1.0, 3.0, 4.0],
                            settle_s=0.01,
                            ramp_s=0.01, release_s=0.005, measure_s=0.005, kf_range_deg=[0.0, 4.0], km_range_deg=[0.0, 4.0])
-    n1 = batch.program_traces()
+    n1, c1 = batch.program_traces(), cache.clears()
     batch.run(exp2, tire, [dict(RATED, load_N=0.8 * RATED["load_N"])])
-    assert batch.program_traces() == n1
+    assert batch.program_traces() - n1 <= cache.clears() - c1  # none, unless the programs were dropped

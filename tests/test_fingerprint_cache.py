@@ -67,3 +67,45 @@ def test_cache_folder_rules(monkeypatch, tmp_path):
     import jax
 
     assert jax.__version__ in d.name
+
+
+_CROWDED = r"""
+import jax, jax.numpy as jnp
+from jax import lax
+from jtire import cache
+
+def make(k):
+    def f(x):
+        for i in range(40):  # cumsum kernels: each its own code, in memory maps of its own
+            x = lax.optimization_barrier(jnp.cumsum(jnp.sin(x * (i + k)))[::-1] * 1e-2)
+        return x
+    return jax.jit(f)
+
+x = jnp.ones(16)
+fs = [make(k) for k in range(4)]
+first = [float(f(x)[0]) for f in fs]
+n0 = cache.map_count()
+assert not cache.release_programs_if_crowded(fraction=(n0 + 1000) / cache.map_limit())  # not crowded
+assert cache.release_programs_if_crowded(fraction=(n0 - 1) / cache.map_limit())  # crowded: cleared
+n1 = cache.map_count()
+again = [float(f(x)[0]) for f in fs]  # the same functions run again (compiled anew), same numbers
+print(n0, n1, cache.clears(), first == again)
+"""
+
+
+@pytest.mark.skipif(cache.map_count() is None or cache.map_limit() is None, reason="no /proc maps to count")
+def test_programs_are_dropped_when_the_maps_near_the_cap():
+    """A process holding compiled programs past the share of vm.max_map_count drops them (each CPU
+    program's kernels sit in memory maps of their own; past the cap XLA's loader segfaults), and the
+    jitted functions still work. In a subprocess: clearing here would make the suite trace again."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, JTIRE_CACHE_DIR="off")
+    p = subprocess.run([sys.executable, "-c", _CROWDED], capture_output=True, text=True, env=env, timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
+    n0, n1, clears, same = p.stdout.split()
+    # four 40-kernel programs hold several hundred maps; the clear frees nearly all of them
+    assert int(n0) - int(n1) > 300, (n0, n1)
+    assert clears == "1" and same == "True"

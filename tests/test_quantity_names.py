@@ -46,8 +46,14 @@ def test_declared_quantities_of_the_rigid_belt_experiments(name, sidewall_runs):
         check_run(run)
 
 
+def test_declared_quantities_of_e13(e13_runs):
+    for run in e13_runs.values():
+        check_run(run)
+
+
 def test_every_experiment_is_checked_somewhere(request):
-    names = {request.getfixturevalue(f).exp.name for f in RUN_FIXTURES} | set(SIDEWALL) | set(ELSEWHERE)
+    names = ({request.getfixturevalue(f).exp.name for f in RUN_FIXTURES} | set(SIDEWALL) | set(ELSEWHERE)
+             | {"sidewall_longitudinal"})
     assert names == set(REGISTRY)
     for cls in REGISTRY.values():  # the traced quantities are among those reduce writes
         assert set(cls.traced_names) <= set(cls.quantity_names), cls.name

@@ -264,6 +264,10 @@ def test_characterize_one_condition_validated(user_dir, capsys):
     char = json.loads((out / "characterization.json").read_text())
     assert char
     assert "| metric | shell | ring |" in (out / "validation.md").read_text()
+    # E13 ran, and the ring's k_bx comes from it (not from the isotropy assumption)
+    rows = json.loads((out / "in_plane.json").read_text())["rows"]
+    assert rows and all(r["k_bx_N_per_m"] > 0 and r["k_bx_source"] == "E13" for r in rows)
+    assert "[INERTIA]" in tir and re.search(r"^MASS\s+= [0-9.]+ ", tir.split("[INERTIA]")[1], re.M)
 
 
 @pytest.mark.slow

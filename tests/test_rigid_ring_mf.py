@@ -94,3 +94,24 @@ def test_shifts_fitted_only_with_negative_angles(nom):
     one_side = synthetic.characterization(pressures_psi=(120.0,))
     r1 = mf.fit_pure_lateral(mf.curves_from_characterization(one_side), nom)
     assert "PHY1" not in r1.fitted_fy and r1.coefficients["PHY1"] == 0.0
+
+
+def test_a_coefficient_on_its_bound_is_named(nom):
+    """Cornering stiffness still proportional to the load over the loads fitted (PKY2 far above its
+    bound of 50 F_z0): the fit ends on the bound, says so, and the .tir comment and notes carry it;
+    the identifiable ratio PKY1 / PKY2 is still recovered (K_y = 2 PKY1 F_z / PKY2 when PKY2 >> 1)."""
+    from jtire.rigid_ring import tir
+
+    truth = TRUE | {"PKY1": -5.0 * 400 / TRUE["PKY2"], "PKY2": 400.0}
+    ch = synthetic.characterization(pressures_psi=(120.0,), mf=truth)
+    r = mf.fit_pure_lateral(mf.curves_from_characterization(ch), nom)
+    assert r.at_bound == ("PKY2",), r.at_bound
+    assert r.coefficients["PKY2"] == pytest.approx(mf.BOUNDS["PKY2"][1])
+    assert "upper bound 50" in r.bound_note("PKY2") and r.bound_note("PKY1") is None
+    assert r.coefficients["PKY1"] / r.coefficients["PKY2"] == pytest.approx(truth["PKY1"] / truth["PKY2"], rel=0.02)
+    sections, notes = tir.build(ch, fit=r)
+    comment = dict((k, c) for k, _, c in sections["LATERAL_COEFFICIENTS"])["PKY2"]
+    assert "upper bound" in comment and any(n.startswith("PKY2 at the fit's upper bound") for n in notes)
+    # the well-posed set ends on no bound
+    assert mf.fit_pure_lateral(mf.curves_from_characterization(synthetic.characterization(pressures_psi=(120.0,))),
+                               nom).at_bound == ()

@@ -31,7 +31,19 @@ def test_vertical_split_variant_a_identities(char):
         assert d.k_bz_B == d.k_dv and 1 / d.k_bz_B + 1 / d.k_vr_B == pytest.approx(1 / d.k_sv, rel=1e-12)
         # one time constant: the series pair is exactly k_sv || tau k_sv
         assert d.C_bz / d.k_bz == pytest.approx(d.C_tot / d.k_sv) and d.C_vr / d.k_vr == pytest.approx(d.tau)
-        assert (d.k_bx, d.C_bx) == (d.k_bz, d.C_bz)
+        assert (d.k_bx, d.C_bx) == (d.k_bz, d.C_bz) and d.k_bx_source.startswith("isotropy")
+
+
+def test_k_bx_and_C_bx_from_e13_when_measured(char):
+    r = char.rows[0]
+    e13 = {"k_bx_N_per_m": 3.1 * r.q["k_sv_N_per_m"], "C_bx_Ns_per_m": 456.0}
+    d = derive(dataclasses.replace(r, q=r.q | e13), char.tire)
+    assert (d.k_bx, d.C_bx, d.k_bx_source) == (e13["k_bx_N_per_m"], 456.0, "E13")
+    assert 1 / d.C_x == pytest.approx(1 / d.k_cx + 1 / d.k_bx + d.r_b**2 / d.k_btheta)
+    assert d.k_bz != d.k_bx  # the vertical split is untouched
+    # a spring without its decay: the damper from the time constant, and the source says so
+    d = derive(dataclasses.replace(r, q=r.q | {"k_bx_N_per_m": e13["k_bx_N_per_m"]}), char.tire)
+    assert d.C_bx == pytest.approx(d.tau * d.k_bx) and "no decay" in d.k_bx_source
 
 
 def test_variant_b_used_when_a_invalid(char):

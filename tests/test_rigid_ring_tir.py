@@ -75,6 +75,9 @@ def test_layout_matches_the_published_mf61_sample(exported):
     for sec, keys in MF61_SAMPLE.items():
         assert list(back[sec]) == keys.split(), sec
     assert back["UNITS"] == SAMPLE_UNITS and back["MODEL"]["FITTYP"] == 61
+    # [INERTIA] MASS is a number (the key shares its name with [UNITS] MASS = 'kg', once quoted too)
+    assert isinstance(back["INERTIA"]["MASS"], float) and back["INERTIA"]["MASS"] > 0
+    assert "MASS                     = 'kg'" in text
 
 
 def test_round_trip_and_comments(exported):
@@ -170,15 +173,22 @@ def test_shell_drop_metrics_search_the_belt_band_below_nyquist(tmp_path, fs):
     case.mkdir(parents=True)
     (case / "result.json").write_text(json.dumps({
         "condition": {"load_N": load, "pressure_Pa": p},
-        "quantities": {"static_deflection_m": 0.035, "f_d_fit_Hz": 2.0, "xi_fit": 0.1}}))
+        "quantities": {"static_deflection_m": 0.035, "f_d_fit_Hz": 2.0, "xi_fit": 0.1},
+        "checks": {"drop_height_m": 0.02, "first_contact_t_s": 0.05}}))
     bounce = np.where(touch, load * (1 + 0.3 * np.exp(-3 * tau) * np.cos(2 * np.pi * 2 * tau)), 0.0)
 
     def metrics(f):
-        rows = ["time_s,contact_force_z_N,rim_z_m"] + [f"{a:.17g},{b:.17g},{-1e-3 * b / load:.17g}" for a, b in zip(t, f)]
+        # rim z: first contact at -drop height, then sinking in proportion to the force (rest: F_z = load)
+        rows = ["time_s,contact_force_z_N,rim_z_m"] + [f"{a:.17g},{b:.17g},{-0.02 - 0.035 * b / load:.17g}"
+                                                       for a, b in zip(t, f)]
         (case / "signals.csv").write_text("\n".join(rows) + "\n")
         return validate.shell_metrics(tmp_path, load, p)
 
     m, sig = metrics(fz)
+    # the drop panel: time from first contact, rim z from where the wheel rests under the load
+    tx, zx = sig["drop"]
+    assert tx == pytest.approx(t - 0.05, abs=1e-12)
+    assert zx == pytest.approx(0.035 * (1 - fz / load), abs=1e-12)
     assert sig["drop_band_Hz"] == pytest.approx((40.0, min(300.0, fs / 2)), rel=1e-9)
     assert m["drop.belt_mode_Hz"] == pytest.approx(120.0, rel=0.01)
     # the bounce alone: its spectrum falls through the band, the maximum sits on the band's lower

@@ -10,12 +10,12 @@ from .lateral import LateralStiffness
 from .phases import Case, Protocol
 from .rolling import RollingResistance
 from .slip_step import SlipStep
-from .sidewall import InplaneRotation, SidewallCamber, SidewallTranslation
+from .sidewall import InplaneRotation, SidewallCamber, SidewallLongitudinal, SidewallTranslation
 from .traction import Traction
 from .vertical import VerticalStiffness
 
 REGISTRY = {cls.name: cls for cls in (Footprint, VerticalStiffness, DrumCleat, DropTest, InplaneRotation, Traction,
                                       SidewallTranslation, SidewallCamber, LateralStiffness, Cornering,
-                                      RelaxationLength, RollingResistance, SlipStep)}
+                                      RelaxationLength, RollingResistance, SlipStep, SidewallLongitudinal)}
 
 __all__ = ["REGISTRY", "Experiment", "Case", "Protocol"]

@@ -1,5 +1,6 @@
 """Sidewall stiffness and damping with a rigid belt: E05 (in-plane rotation), E07 (lateral
-translation), E08 (camber-wise rotation).
+translation), E08 (camber-wise rotation), and E13 (fore-aft translation: jtire's addition, not in the
+study, which assumed k_bx = k_bz; `direction = "z"` pushes the belt vertically instead).
 
 Rim locked in all six DOFs, no road, the belt (crown part: belt, undertread, tread) rigid
 (`physics.rigid_belt`), so only the sidewalls deform; rigid from the start, through the inflation too
@@ -17,6 +18,7 @@ Loads, as the resultant `Drive.belt_load` takes (force, moment about the belt's 
     E05: circumferential force F at the belt radius r  -> M_y = F r    (k_btheta = F r / theta_ss)
     E07: F at the top and F at the bottom, same side  -> F_y = 2 F    (k_by = 2 F / y_ss)
     E08: F at the top and F at the bottom, opposite   -> M_x = 2 F r  (k_bgamma = 2 F r / gamma_ss)
+    E13: F at the top and F at the bottom, fore-aft   -> F_x = 2 F    (k_bx = 2 F / x_ss)
 r is the belt radius at its centre line (the distance from the axle to the belt where the forces act,
 measured on the inflated state). On a rigid body only the resultant matters. The load does not enter.
 """
@@ -246,4 +248,42 @@ class SidewallCamber(_Sidewall):
 
     def load6(self, r):
         return jnp.zeros(6).at[3].set(2 * self.force * r)
+
+
+DIRECTIONS = {"x": 0, "z": 2}
+
+
+class SidewallLongitudinal(_Sidewall):
+    """E13: the in-plane translational sidewall spring and damper the rigid ring's fore-aft / wind-up
+    mode rests on. Without a road the tire is axisymmetric about the axle, so the fore-aft (x) and the
+    vertical (z) rigid-belt springs are the same spring seen from two sides (the tests check that)."""
+
+    name = "sidewall_longitudinal"
+    study_id = "E13"
+    description = "E13 longitudinal sidewall stiffness and damping (k_bx, C_bx), rigid belt (jtire's addition)"
+    schema = _Sidewall.schema_for(2.0, "kN at each of top and bottom (same direction)") | {
+        "direction": Field(str, default="x", choices=tuple(DIRECTIONS))}
+    k_name, c_name, c_unit, x_name = "k_bx_N_per_m", "C_bx", "Ns_per_m", "x_ss_m"
+    mass_name = "decay_mass_kg"
+    own_key = "belt_kg"
+    traced_names = ("k_bx_N_per_m", "x_ss_m")
+    quantity_names = _Sidewall.names_for(k_name, x_name, "load_N", mass_name, c_name, c_unit)
+    direction: str = eqx.field(static=True, default="x")
+
+    @classmethod
+    def from_table(cls, table, proto, tire_spec):
+        return cls(proto=proto, force=f64(table["force_kN"]), decay=f64(table["decay_s"]),
+                   release_ramp=f64(table["release_ramp_ms"]), direction=table.get("direction", "x"))
+
+    @property
+    def saved_field(self):
+        return ("belt_disp", DIRECTIONS[self.direction])
+
+    def load6(self, r):
+        return jnp.zeros(6).at[DIRECTIONS[self.direction]].set(2 * self.force)
+
+    def reduce(self, tire, condition, outputs):
+        res = super().reduce(tire, condition, outputs)
+        res.info["direction"] = self.direction  # "z": the same spring pushed vertically (k_bz of the rigid belt)
+        return res
 

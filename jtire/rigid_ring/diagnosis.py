@@ -22,7 +22,7 @@ Causes the checks look for (each found on the default mesh; see the module's tes
   * damping ratios: the damping value the table chose (two-peak or fit) against the one the shell's
     metric is (the fit), the ring's frequency entering zeta = C / (2 m omega), and the single time
     constant tau = C_tot / k_sv of §3 that makes the ring's belt damping grow with frequency;
-  * drum fore-aft mode: the isotropy assumption k_bx = k_bz (no fore-aft sidewall test);
+  * drum fore-aft mode: k_bx (E13's, or the isotropy assumption k_bx = k_bz without E13);
   * lateral release: the reduced lateral model (m_tot on k_l) against the belt's own DOFs;
   * slip step: speed dependence of the shell, the E10 window not yet steady, the linear k_m against
     the curved M_z(alpha), and a first-order lag over sigma = k_f / k_l against a contact patch of

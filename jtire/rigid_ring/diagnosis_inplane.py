@@ -214,15 +214,19 @@ def _drum_fore_aft_f(cx, c):
     if m0 is None or not _within(m0[0], c.ring, 0.01):
         return NONE, ("the ring's linearized fore-aft modes "
                       f"({', '.join(_n(m[0], 'Hz') for m in fore_aft_modes(d, v))}) do not reproduce its metric")
-    parts = [f"the ring's fore-aft / wind-up mode at {_n(c.ring, 'Hz')} rests on the isotropy assumption k_bx = k_bz = "
-             f"{_n(d.k_bz, 'N/m')} (§3: no test measures k_bx)"]
+    if d.k_bx_source and d.k_bx_source.startswith("E13"):
+        parts = [f"the ring's fore-aft / wind-up mode at {_n(c.ring, 'Hz')} uses k_bx = {_n(d.k_bx, 'N/m')} measured by E13 "
+                 f"(the vertical split's k_bz is {_n(d.k_bz, 'N/m')})"]
+    else:
+        parts = [f"the ring's fore-aft / wind-up mode at {_n(c.ring, 'Hz')} rests on the isotropy assumption k_bx = k_bz = "
+                 f"{_n(d.k_bz, 'N/m')} (§3: no E13 in this characterization)"]
     grid = np.geomspace(0.25, 8.0, 121)
     start = int(np.argmin(abs(grid - 1.0)))
     g, fr = [], []
-    for direction in (range(start, grid.size), range(start, -1, -1)):  # follow the mode from k_bx = k_bz
+    for direction in (range(start, grid.size), range(start, -1, -1)):  # follow the mode from the ring's k_bx
         f_prev = m0[0]
         for i in direction:
-            f_prev = _fore_aft_mode(cx, f_prev, v, k_bx=grid[i] * d.k_bz)[0]
+            f_prev = _fore_aft_mode(cx, f_prev, v, k_bx=grid[i] * d.k_bx)[0]
             g.append(grid[i])
             fr.append(f_prev)
     order = np.argsort(g)
@@ -233,10 +237,10 @@ def _drum_fore_aft_f(cx, c):
         j = int(hit[0])
         mult = float(np.interp(c.shell, sorted([fr[j], fr[j + 1]]),
                                [g[j], g[j + 1]] if fr[j] < fr[j + 1] else [g[j + 1], g[j]]))
-        parts.append(f"k_bx = {_n(mult * d.k_bz, 'N/m')} ({mult:.3g} x k_bz) puts it at the shell's {_n(c.shell, 'Hz')}")
+        parts.append(f"k_bx = {_n(mult * d.k_bx, 'N/m')} ({mult:.3g} x the ring's) puts it at the shell's {_n(c.shell, 'Hz')}")
         state = FULL
     else:
-        parts.append(f"no k_bx within {grid[0]:g}..{grid[-1]:g} x k_bz reaches the shell's {_n(c.shell, 'Hz')} "
+        parts.append(f"no k_bx within {grid[0]:g}..{grid[-1]:g} x the ring's reaches the shell's {_n(c.shell, 'Hz')} "
                      f"(range {_n(float(fr.min()), 'Hz')}..{_n(float(fr.max()), 'Hz')})")
     pk = _shell_fx_peaks(cx)
     if pk and len(pk) > 1:
@@ -260,9 +264,10 @@ def _drum_fore_aft_zeta(cx, c):
     f_bx = math.sqrt(d.k_bx / d.tire.m_b_kg) / (2 * math.pi)
     z_bx = d.C_bx / (2 * math.sqrt(d.k_bx * d.tire.m_b_kg))
     txt = (f"of the ring's modal zeta {m0[1]:.3g}, the rolling tread's slip lag (contact relaxation length a, "
-           f"V = {v:.3g} m/s) gives {z_none:.3g} alone, C_btheta {z_nobx - z_none:.2g}, and C_bx = tau k_bx = "
-           f"{_n(d.C_bx, 'N s/m')} the rest: isotropy plus one tau = C_tot/k_sv (§3) make it stiffness-proportional, "
-           f"zeta_bx = pi f_bx tau = {z_bx:.3g} at f_bx = {_n(f_bx, 'Hz')}")
+           f"V = {v:.3g} m/s) gives {z_none:.3g} alone, C_btheta {z_nobx - z_none:.2g}, and C_bx = "
+           f"{_n(d.C_bx, 'N s/m')} ({d.k_bx_source}) the rest: zeta_bx = {z_bx:.3g} at f_bx = {_n(f_bx, 'Hz')}")
+    if not (d.k_bx_source or "").startswith("E13"):
+        txt += "; isotropy plus one tau = C_tot/k_sv (§3) make it stiffness-proportional"
     state = NONE
     zs = cx.val("drum.vertical_mode_zeta", "shell")
     if zs:

@@ -134,6 +134,18 @@ class FitResult:
     max_mz_error: float | None
     success: bool
     message: str
+    at_bound: tuple = ()  # fitted coefficients that ended on a bound of BOUNDS: not identified by the curves
+
+    def bound_note(self, key):
+        """Why a coefficient sits on its bound, or None."""
+        if key not in self.at_bound:
+            return None
+        lo, hi = BOUNDS[key]
+        v = self.coefficients[key]
+        side = "upper" if abs(v - hi) <= abs(v - lo) else "lower"
+        why = ("K_y still proportional to F_z over the loads fitted: only PKY1 / PKY2 is identified"
+               if key == "PKY2" else "the curves do not pin it")
+        return f"at the fit's {side} bound {hi if side == 'upper' else lo:g}: {why}"
 
 
 def _to_iso(d: CurveData):
@@ -242,11 +254,13 @@ def fit_pure_lateral(data, nominal: Nominal, fit_pkY4=False, fit_shifts=None, fi
         if m is not None and w.any():
             e_mz = float(np.max(np.abs(mz0(coef, nominal, d.fz, a[w], d.p) - m[w])) / max(np.max(np.abs(m)), 1e-9))
         errors.append((d.fz, d.p, e_fy, e_mz))
+    at_bound = tuple(n for n in names + mz_names
+                     if min(abs(coef[n] - BOUNDS[n][0]), abs(coef[n] - BOUNDS[n][1])) <= 1e-6 * (BOUNDS[n][1] - BOUNDS[n][0]))
     fy_errs = [e[2] for e in errors if e[2] is not None]
     mz_errs = [e[3] for e in errors if e[3] is not None]
     return FitResult(coefficients=coef, fitted_fy=tuple(names), fitted_mz=tuple(mz_names), nominal=nominal,
                      errors=tuple(errors), err_range_deg=err_range_deg, max_fy_error=max(fy_errs) if fy_errs else float("nan"),
-                     max_mz_error=max(mz_errs) if mz_errs else None, success=ok, message=msg)
+                     max_mz_error=max(mz_errs) if mz_errs else None, success=ok, message=msg, at_bound=at_bound)
 
 
 def curves_from_characterization(char, pressures=None) -> list:

@@ -13,7 +13,8 @@ Vertical split (§3). 1/k_sv = 1/k_bz + 1/k_vr (sidewall and residual springs in
   Variant B (reported beside; used when A is invalid): k_bz = k_dv, k_vr = (1/k_sv - 1/k_dv)^-1.
   Damping: one time constant tau = C_tot / k_sv for both, C_bz = tau k_bz, C_vr = tau k_vr (two
   Kelvin-Voigt elements with equal tau in series are exactly one with k_sv and tau k_sv).
-Isotropic sidewall: k_bx = k_bz, C_bx = C_bz (the study measures no longitudinal sidewall spring).
+Longitudinal sidewall spring: k_bx, C_bx measured by E13 (rigid belt pushed fore-aft, jtire's addition);
+  without E13 the first spec's isotropy assumption k_bx = k_bz, C_bx = tau k_bx, named in k_bx_source.
 Lateral tread spring (§5): 1/k_cy = 1/k_l - 1/k_by - r_b^2/k_bgamma (rim held in camber; r_b the
   belt centre's height above the road, R0 - F_z/k_vr, the ring's lever arm),
   sigma_c = k_f / k_cy, C_cy = k_cy C_l / k_l. Ill-conditioned (a difference of compliances a few
@@ -97,6 +98,7 @@ class Derived:
     k_l_ring_rel_error: float | None
     C_x: float | None  # LONGITUDINAL_STIFFNESS: 1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta
     trail: float | None  # k_m / k_f
+    k_bx_source: str | None = None  # "E13" (measured) or the isotropy assumption's name
 
     def structural(self) -> dict:
         """FREQ_* (Hz) and DAMP_* (-) of §7, None where an input is missing."""
@@ -188,7 +190,14 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
         if _ok(c_l):
             c_cy = k_cy * c_l / k_l
     c_x = None
-    k_bx = k_bz
+    k_bx, c_bx = g("k_bx_N_per_m"), g("C_bx_Ns_per_m")
+    if _ok(k_bx) and k_bx > 0:
+        bx_src = "E13"
+        if not _ok(c_bx):
+            c_bx, bx_src = times(tau, k_bx), "E13 (C_bx = tau k_bx: no decay)"
+    else:
+        k_bx, c_bx = k_bz, times(tau, k_bz)
+        bx_src = None if k_bz is None else "isotropy assumption k_bx = k_bz (no E13)"
     if _ok(k_cx, k_bx, r_b, k_btheta):
         c_x = 1.0 / (1.0 / k_cx + 1.0 / k_bx + r_b**2 / k_btheta)
     return Derived(
@@ -198,9 +207,9 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
         C_l=c_l, k_f=k_f, k_m=k_m, sigma_measured=g("sigma_m"), rho=rho, r_l=r_l, r_b=r_b, r_e=r_e,
         variant_A_valid=bool(valid_a), variant_used=used, k_bz_A=k_bz_a, k_vr_A=k_vr_a, k_bz_B=k_bz_b,
         k_vr_B=k_vr_b, k_bz=k_bz, k_vr=k_vr, tau=tau, C_bz=times(tau, k_bz), C_vr=times(tau, k_vr),
-        C_bz_B=times(tau, k_bz_b), C_vr_B=times(tau, k_vr_b), k_bx=k_bx, C_bx=times(tau, k_bx), sigma=sigma,
+        C_bz_B=times(tau, k_bz_b), C_vr_B=times(tau, k_vr_b), k_bx=k_bx, C_bx=c_bx, sigma=sigma,
         k_cy=k_cy, sigma_c=sigma_c, C_cy=c_cy, k_cy_source=src, k_l_ring=k_l_ring, k_l_ring_rel_error=k_l_err,
-        C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None)
+        C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src)
 
 
 def _leaf(x):

@@ -58,6 +58,7 @@ def table_rows(char: Characterization, plane: str) -> list:
                 row[name] = getattr(d, attr)
         if plane == "in":
             row["vertical_split"] = d.variant_used
+            row["k_bx_source"] = d.k_bx_source
             row["variant_A_valid"] = d.variant_A_valid
             if d.k_dv is not None and d.k_sv is not None:
                 row["k_dv_over_k_sv"] = d.k_dv / d.k_sv
@@ -137,6 +138,8 @@ def markdown(char: Characterization, plane: str) -> str:
     if plane == "in":
         items.append(("vertical split used", lambda r, d: DASH if d.variant_used is None else
                       d.variant_used + ("" if d.variant_A_valid else " (A invalid: k_dv < 4 k_sv)")))
+        items.append(("k_bx, C_bx source", lambda r, d: DASH if d.k_bx_source is None else
+                      ("E13" if d.k_bx_source.startswith("E13") else "k_bz (isotropy: no E13)")))
     else:
         items.append(("k_cy source", lambda r, d: DASH if d.k_cy_source is None else
                       ("series" if d.k_cy_source.startswith("series") else "fallback sigma_c = a")))

@@ -115,7 +115,8 @@ def drop_test(d: Derived, drop_height=0.02, duration=0.4, gravity=0.0, n_save=40
                "zeta_quasi_static": d.C_tot / (2 * math.sqrt(k_sv * m_tot)),
                "bounce_f_n_Hz": float(fn[0]), "bounce_zeta": float(zeta[0]),
                "belt_mode_f_n_Hz": float(fn[-1]), "belt_mode_zeta": float(zeta[-1])}
-    signals = {"time_s": ts, "rim_z_m": za, "belt_z_m": ys[:, IDX["z_b"]], "contact_force_z_N": fzc}
+    signals = {"time_s": ts, "rim_z_m": za, "belt_z_m": ys[:, IDX["z_b"]], "contact_force_z_N": fzc,
+               "rim_z_from_rest_m": za - eq["z_a"]}  # from where the wheel rests under the load
     return ScenarioResult("drop_test", q, implied, signals, {"drop_height_m": drop_height, "gravity": gravity,
                                                              "two_peak_reason": fd.two_peak_reason})
 

@@ -1,7 +1,7 @@
 """The characterization: what `jtire characterize` writes and every rigid-ring tool reads.
 
 A characterization is the tire's reference data plus one row per condition (load x pressure) holding
-the SI quantities the virtual experiments E01-E11 produce, and the E10 curves of that condition.
+the SI quantities the virtual experiments E01-E11 and E13 produce, and the E10 curves of that condition.
 Any quantity may be missing (an experiment not run, or failed): the row then lacks the key or holds
 None, tables print "—" and whatever depends on it is None.
 
@@ -73,6 +73,9 @@ QUANTITIES = (
     _q("k_btheta_Nm_per_rad", "k_btheta", "N m/rad", "E05", "in-plane rotational sidewall stiffness", "in",
        display=("kN m/rad", 1e-3)),
     _q("C_btheta_Nms_per_rad", "C_btheta", "N m s/rad", "E05", "in-plane rotational sidewall damping", "in", True),
+    _q("k_bx_N_per_m", "k_bx", "N/m", "E13", "longitudinal sidewall stiffness (rigid belt, fore-aft)", "in",
+       display=("kN/m", 1e-3)),
+    _q("C_bx_Ns_per_m", "C_bx", "N s/m", "E13", "longitudinal sidewall damping (rigid belt, fore-aft)", "in", True),
     _q("k_k_N_per_slip", "k_k", "N", "E06", "longitudinal slip stiffness", "in", display=("kN", 1e-3)),
     _q("k_cx_N_per_m", "k_cx", "N/m", "E06", "tread longitudinal stiffness k_k / a", "in", display=("kN/m", 1e-3)),
     _q("k_by_N_per_m", "k_by", "N/m", "E07", "lateral sidewall stiffness", "out", display=("kN/m", 1e-3)),

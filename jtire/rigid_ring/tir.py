@@ -60,7 +60,6 @@ SECTIONS = (
                               "QDTP1 QCRP1 QCRP2 QBRP1 QDRP1"),
 )
 LAYOUT = {s: tuple(k.split()) for s, k in SECTIONS}
-STRINGS = {"FILE_TYPE", "FILE_FORMAT", "LENGTH", "FORCE", "ANGLE", "MASS", "TIME", "TYRESIDE", "PROPERTY_FILE_FORMAT"}
 
 D = "default"
 DEFAULTS = {
@@ -206,7 +205,11 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None):
     if fit is not None:
         for k in mf.FY_KEYS + mf.MZ_KEYS:
             how = "fitted to the E10 curves" if k in fit.fitted_fy + fit.fitted_mz else "fixed in the E10 fit"
-            put(k, fit.coefficients[k], f"{how} (max F_y error {100 * fit.max_fy_error:.2g} % of peak over 0-{fit.err_range_deg:g} deg)")
+            bound = fit.bound_note(k)
+            if bound:
+                notes.append(f"{k} {bound}")
+            put(k, fit.coefficients[k], f"{how} (max F_y error {100 * fit.max_fy_error:.2g} % of peak over 0-{fit.err_range_deg:g} deg)"
+                + (f"; {bound}" if bound else ""))
         angles = [abs(a) for r in char.rows if r.curves is not None for a in r.curves.slip_angle_deg]
         put("ALPMIN", -math.radians(max(angles)), "widest E10 slip angle")
         put("ALPMAX", math.radians(max(angles)), "widest E10 slip angle")
@@ -237,7 +240,8 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None):
 
 
 def _fmt(k, v):
-    if k in STRINGS:
+    # by the value, not the key: [UNITS] MASS is the unit name 'kg', [INERTIA] MASS a number
+    if isinstance(v, str):
         return f"'{v}'"
     if isinstance(v, int) and not isinstance(v, bool):
         return str(v)
