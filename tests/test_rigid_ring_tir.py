@@ -146,8 +146,9 @@ def test_compare_verdicts_and_figure(tmp_path):
     assert rows["drum.F_z_peak_to_peak_N"].verdict == "not compared"  # needs enveloping
     assert "| drop.bounce_zeta |" in validation.markdown(rows.values())
     t = np.linspace(0, 1, 50)
-    p = validation.validation_figure({"drop": (t, np.sin(t))}, {"drop": (t, np.cos(t)), "step_5": (t, t)},
-                                     tmp_path / "v.png")
+    step = -1e4 * (1 - np.exp(-5 * t)) + 300 * np.sin(200 * t)  # a build-up with a ripple on it
+    p = validation.validation_figure({"drop": (t, np.sin(t)), "step_5": (t, step)},
+                                     {"drop": (t, np.cos(t)), "step_5": (t, t)}, tmp_path / "v.png")
     assert p.stat().st_size > 1000
 
 

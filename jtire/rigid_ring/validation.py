@@ -166,8 +166,9 @@ def validation_figure(shell_signals: dict, ring_signals_: dict, path, title="Rig
             tail = y[x >= x[0] + 0.7 * (x[-1] - x[0])]
             if tail.size > 3 and np.nanmean(np.abs(tail)) > 0:
                 rip = 0.5 * np.ptp(tail) / abs(np.nanmean(tail))
-                ax.text(0.98, 0.05, f"shell ripple over the last 30 %: ±{100 * rip:.1f} % of its mean "
-                        "(segment pitch)", transform=ax.transAxes, ha="right", fontsize=7)
+                ax.text(0.98, 0.93, f"shell ripple over the last 30 %: ±{100 * rip:.1f} % of its mean "
+                        "(segment pitch)", transform=ax.transAxes, ha="right", va="top", fontsize=7,
+                        bbox={"fc": "white", "alpha": 0.8, "lw": 0})
         ax.set_title(name, fontsize=9)
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
