@@ -8,7 +8,7 @@ Each program is a chain of `--ops` cumsum kernels (kept alive, as long jobs keep
 functions). Prints, per program, the process's memory maps and whether
 `jtire.cache.release_programs_if_crowded` cleared. Without `--guard` the process crosses the cap and
 XLA's loader fails ("LLVM compilation error: Cannot allocate memory") and then segfaults (measured here:
-65,417 maps at program 207 of 100 kernels each, exit 139). Runs without the persistent cache.
+65,416 maps at program 207 of 100 kernels each, exit 139). Runs without the persistent cache.
 Take it alone on the machine: a program compiles in ~1-2 s.
 """
 
