@@ -55,7 +55,8 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
     m, sig = {}, {}
     d = _case_dir(char_dir, "drop_test", load_N, pressure_Pa)
     if d is not None:
-        q = json.loads((d / "result.json").read_text())["quantities"]
+        r = json.loads((d / "result.json").read_text())
+        q, chk = r["quantities"], r["checks"]
         s = _signals(d)
         t, fz = s["time_s"], s["contact_force_z_N"]
         band = belt_band(t)
@@ -68,13 +69,12 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
         sig["drop_band_Hz"] = band
         # rim z from where the wheel rests under the load (first contact at z = -drop height, then the
         # static deflection), time from first contact: the ring's panel is drawn the same way
-        chk = json.loads((d / "result.json").read_text())["checks"]
         rest = -(float(chk["drop_height_m"]) + float(q["static_deflection_m"]))
         sig["drop"] = (t - float(chk["first_contact_t_s"]), s["rim_z_m"] - rest)
     d = _case_dir(char_dir, "drum_cleat", load_N, pressure_Pa)
     if d is not None:
-        q = json.loads((d / "result.json").read_text())["quantities"]
-        info = json.loads((d / "result.json").read_text())["info"]
+        r = json.loads((d / "result.json").read_text())
+        q, info = r["quantities"], r["info"]
         s = _signals(d)
         t = s["time_s"]
         after = float(info["t_cleat_leave_s"] - info["t_cleat_touch_s"])

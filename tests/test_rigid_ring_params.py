@@ -39,6 +39,7 @@ def test_k_bx_and_C_bx_from_e13_when_measured(char):
     e13 = {"k_bx_N_per_m": 3.1 * r.q["k_sv_N_per_m"], "C_bx_Ns_per_m": 456.0}
     d = derive(dataclasses.replace(r, q=r.q | e13), char.tire)
     assert (d.k_bx, d.C_bx, d.k_bx_source) == (e13["k_bx_N_per_m"], 456.0, "E13")
+    assert d.k_bx_measured and not derive(r, char.tire).k_bx_measured
     assert 1 / d.C_x == pytest.approx(1 / d.k_cx + 1 / d.k_bx + d.r_b**2 / d.k_btheta)
     assert d.k_bz != d.k_bx  # the vertical split is untouched
     # a spring without its decay: the damper from the time constant, and the source says so

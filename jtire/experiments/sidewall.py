@@ -79,6 +79,7 @@ class _Sidewall(Experiment):
     release_ramp: jax.Array
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)
     inertia: str = eqx.field(static=True, default="model")  # E05, E08: "study" takes [reference]'s
+    options: ClassVar[tuple] = ()  # further static fields taken from the table as they are
 
     @staticmethod
     def schema_for(force_kN, force_help, inertia=False):
@@ -102,7 +103,8 @@ class _Sidewall(Experiment):
             raise ConfigError(f"{cls.name}.inertia = 'study': the tire file's [reference] gives no {cls.own_key} "
                               f"(allowed: {', '.join(INERTIAS)}; model: the model's own)")
         return cls(proto=proto, force=f64(table["force_kN"]), decay=f64(table["decay_s"]),
-                   release_ramp=f64(table["release_ramp_ms"]), inertia=inertia)
+                   release_ramp=f64(table["release_ramp_ms"]), inertia=inertia,
+                   **{k: table[k] for k in cls.options if k in table})
 
     def load6(self, r):
         raise NotImplementedError
@@ -269,11 +271,7 @@ class SidewallLongitudinal(_Sidewall):
     traced_names = ("k_bx_N_per_m", "x_ss_m")
     quantity_names = _Sidewall.names_for(k_name, x_name, "load_N", mass_name, c_name, c_unit)
     direction: str = eqx.field(static=True, default="x")
-
-    @classmethod
-    def from_table(cls, table, proto, tire_spec):
-        return cls(proto=proto, force=f64(table["force_kN"]), decay=f64(table["decay_s"]),
-                   release_ramp=f64(table["release_ramp_ms"]), direction=table.get("direction", "x"))
+    options = ("direction",)
 
     @property
     def saved_field(self):
@@ -286,4 +284,3 @@ class SidewallLongitudinal(_Sidewall):
         res = super().reduce(tire, condition, outputs)
         res.info["direction"] = self.direction  # "z": the same spring pushed vertically (k_bz of the rigid belt)
         return res
-

@@ -100,6 +100,11 @@ class Derived:
     trail: float | None  # k_m / k_f
     k_bx_source: str | None = None  # "E13" (measured) or the isotropy assumption's name
 
+    @property
+    def k_bx_measured(self) -> bool:
+        """k_bx (and C_bx, or tau k_bx) from E13 rather than the isotropy assumption."""
+        return (self.k_bx_source or "").startswith("E13")
+
     def structural(self) -> dict:
         """FREQ_* (Hz) and DAMP_* (-) of §7, None where an input is missing."""
         t = self.tire

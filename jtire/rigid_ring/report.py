@@ -139,7 +139,7 @@ def markdown(char: Characterization, plane: str) -> str:
         items.append(("vertical split used", lambda r, d: DASH if d.variant_used is None else
                       d.variant_used + ("" if d.variant_A_valid else " (A invalid: k_dv < 4 k_sv)")))
         items.append(("k_bx, C_bx source", lambda r, d: DASH if d.k_bx_source is None else
-                      ("E13" if d.k_bx_source.startswith("E13") else "k_bz (isotropy: no E13)")))
+                      ("E13" if d.k_bx_measured else "k_bz (isotropy: no E13)")))
     else:
         items.append(("k_cy source", lambda r, d: DASH if d.k_cy_source is None else
                       ("series" if d.k_cy_source.startswith("series") else "fallback sigma_c = a")))
