@@ -117,6 +117,9 @@ class Emulator:
     var_scale a, var_floor b: (m,) the predictive variance v becomes max(a v, v + b) where b > 0, and
     a v where b = 0 (a = 1, b = 0 unless calibrated on held-out simulator runs:
     `calibration.conformal.calibrate_variance`).
+    bias: (m, d) or None: the calibration's bias entries (`ParamSpace.bias_matrix`). The models are
+    then fitted to the tire's own responses (a run's response less its bias, known exactly) and
+    `predict` returns ln(tire + b), its variance mapped through the sum; `predict_tire` the tire's.
     """
 
     space: object
@@ -127,19 +130,30 @@ class Emulator:
     n_points: int
     var_scale: np.ndarray = None
     var_floor: np.ndarray = None
+    bias: np.ndarray = None
 
-    def predict(self, thetas):
-        """thetas (n, d) -> (mean of ln response (n, m), predictive variance (n, m))."""
+    def predict_tire(self, thetas):
+        """thetas (n, d) -> (mean, variance) of ln(the tire's own response), (n, m) each."""
         u = self.space.to_unit(np.atleast_2d(np.asarray(thetas, float)))
         out = [m.predict(u) for m in self.models]
-        var = np.stack([o[1] for o in out], axis=-1)
+        return np.stack([o[0] for o in out], axis=-1), np.stack([o[1] for o in out], axis=-1)
+
+    def predict(self, thetas):
+        """thetas (n, d) -> (mean of ln response (n, m), predictive variance (n, m)); with a bias,
+        the response is what the targets measure: tire + b (delta method for the variance)."""
+        thetas = np.atleast_2d(np.asarray(thetas, float))
+        mean, var = self.predict_tire(thetas)
+        if self.bias is not None:
+            tire = np.exp(mean)
+            total = tire + thetas @ self.bias.T
+            mean, var = np.log(total), var * (tire / total) ** 2
         a = 1.0 if self.var_scale is None else np.asarray(self.var_scale, float)
         if self.var_floor is not None:
             b = np.asarray(self.var_floor, float)
             var = np.where(b > 0, np.maximum(a * var, var + b), a * var)
         else:
             var = a * var
-        return np.stack([o[0] for o in out], axis=-1), var
+        return mean, var
 
     def summary(self) -> dict:
         out = {"n_points": self.n_points, "chosen": dict(zip(self.names, self.kinds)),
@@ -176,6 +190,9 @@ def fit_emulator(space, names, thetas, responses, candidates=CANDIDATES, seed: i
     """
     thetas = np.atleast_2d(np.asarray(thetas, float))
     y = np.asarray(responses, float).reshape(thetas.shape[0], -1)
+    bias = space.bias_matrix(names) if getattr(space, "has_bias", False) else None
+    if bias is not None:  # the tire's own responses: what the runs measured less their (known) bias
+        y = y - thetas @ bias.T
     ok = usable(y) & np.all(np.isfinite(thetas), axis=1)
     u, ly = space.to_unit(thetas[ok]), np.log(y[ok])
     if u.shape[0] < space.d + 2:
@@ -192,4 +209,4 @@ def fit_emulator(space, names, thetas, responses, candidates=CANDIDATES, seed: i
         best = min(finite, key=finite.get) if finite else min(scores, key=scores.get)
         models.append(cands[best]), kinds.append(best)
         loo[name] = scores
-    return Emulator(space, tuple(names), models, tuple(kinds), loo, int(u.shape[0]))
+    return Emulator(space, tuple(names), models, tuple(kinds), loo, int(u.shape[0]), bias=bias)

@@ -69,8 +69,9 @@ class LogPosterior:
         thetas = np.atleast_2d(thetas)
         inside = np.all((thetas >= self.space.lower) & (thetas <= self.space.upper), axis=1)
         lp = np.zeros(thetas.shape[0])
-        if self.prior == "log_normal":
-            lp = -0.5 * np.sum(((thetas - self.space.default) / self.sigma_ln) ** 2, axis=1)
+        if self.prior == "log_normal":  # on the tire's parameters; a bias stays uniform
+            z = (thetas - self.space.default) / self.sigma_ln
+            lp = -0.5 * np.sum(z[:, self.space.tire_indices] ** 2, axis=1)
         return np.where(inside, lp, -np.inf)
 
     def __call__(self, thetas):
@@ -357,9 +358,13 @@ def diagnostics(res: SamplerResult) -> dict:
 def prior_interval(space, prior: str, sigma_ln: float, level: float = 0.9) -> np.ndarray:
     """(d, 2) central `level` interval of each theta under the prior."""
     a = 0.5 * (1 - level)
+    uniform = np.stack([space.lower + a * space.width, space.upper - a * space.width], axis=1)
     if prior == "log_uniform":
-        return np.stack([space.lower + a * space.width, space.upper - a * space.width], axis=1)
+        return uniform
     lo = (space.lower - space.default) / sigma_ln
     hi = (space.upper - space.default) / sigma_ln
     tn = stats.truncnorm(lo, hi, loc=space.default, scale=sigma_ln)
-    return np.stack([tn.ppf(a), tn.ppf(1 - a)], axis=1)
+    out = np.stack([tn.ppf(a), tn.ppf(1 - a)], axis=1)
+    bias = [j for j in range(space.d) if space.is_bias(j)]  # a bias's prior is uniform always
+    out[bias] = uniform[bias]
+    return out

@@ -27,8 +27,10 @@ __all__ = ["predictive", "widths", "plot_corner", "simulator_check", "check_draw
 _Z90 = float(stats.norm.ppf(0.95))
 
 
-def predictive(emulator, samples, targets, seed: int = 0, level: float = 0.9) -> list:
-    """Rows: target, quantity, measured, median, lower, upper (target unit and derived)."""
+def predictive(emulator, samples, targets, seed: int = 0, level: float = 0.9, space=None) -> list:
+    """Rows: target, quantity, measured, median, lower, upper (target unit and derived). With a
+    bias in `space`, a biased target gets rows for the tire alone (draw minus its bias) and the
+    bias."""
     rng = np.random.default_rng(seed)
     mu, var = emulator.predict(samples)
     ly = mu + np.sqrt(np.maximum(var, 0)) * rng.standard_normal(mu.shape)
@@ -46,12 +48,29 @@ def predictive(emulator, samples, targets, seed: int = 0, level: float = 0.9) ->
         if label != t.name:
             rows.append({"target": t.name, "what": label, "unit": unit, "measured": float(dm),
                          "median": dmed, "lower": min(dlo, dhi), "upper": max(dlo, dhi)})
+        b = None if space is None or not space.has_bias else (
+            samples @ space.bias_matrix([tt.name for tt in targets])[i])
+        if b is not None and np.any(space.bias_matrix([tt.name for tt in targets])[i]):
+            # the tire's own response from the emulator of the tire (not draw minus bias: the two
+            # draws' noises would not cancel)
+            mt, vt = emulator.predict_tire(samples)
+            tire = np.exp(mt[:, i] + np.sqrt(np.maximum(vt[:, i], 0)) * rng.standard_normal(len(samples)))
+            for what, v in (("tire alone", tire), ("bias", b)):
+                med, lo, hi = np.percentile(v, q)
+                rows.append({"target": t.name, "what": f"{t.quantity}: {what}", "unit": t.unit,
+                             "measured": float("nan"), "median": med / t.unit_factor,
+                             "lower": lo / t.unit_factor, "upper": hi / t.unit_factor})
+            label, dv, unit = derived_quantity(t, tire)
+            if label != t.name:
+                med, lo, hi = np.percentile(dv, q)
+                rows.append({"target": t.name, "what": f"{label}: tire alone", "unit": unit,
+                             "measured": float("nan"), "median": med, "lower": lo, "upper": hi})
     return rows
 
 
 def widths(samples, space, prior: str, sigma_ln: float, level: float = 0.9) -> list:
-    """Rows: parameter, prior and posterior `level` interval widths in ln p, their ratio, the
-    posterior median in the tire file's unit."""
+    """Rows: parameter, prior and posterior `level` interval widths in ln p (a bias: in its SI
+    unit), their ratio, the posterior median and `level` interval in the tire file's unit."""
     a = 50 * (1 - level)
     post = np.percentile(samples, [a, 100 - a], axis=0).T
     pri = prior_interval(space, prior, sigma_ln, level)
@@ -61,7 +80,9 @@ def widths(samples, space, prior: str, sigma_ln: float, level: float = 0.9) -> l
         factor, unit = space.file_unit(i)
         pw, qw = float(pri[i, 1] - pri[i, 0]), float(post[i, 1] - post[i, 0])
         rows.append({"parameter": n, "prior_width_ln": pw, "posterior_width_ln": qw,
-                     "ratio": qw / pw, "median": float(np.exp(med[i]) / factor), "unit": unit})
+                     "ratio": qw / pw, "median": float(space.value(i, med[i]) / factor),
+                     "lower": float(space.value(i, post[i, 0]) / factor),
+                     "upper": float(space.value(i, post[i, 1]) / factor), "unit": unit})
     return rows
 
 

@@ -197,10 +197,12 @@ class RunLog:
             t0 = time.perf_counter()
             vals = check_batch(self.sim, thetas[idx], self.sim.evaluate(thetas[idx]))
             wall = time.perf_counter() - t0
+            failed = getattr(self.sim, "last_failures", None) or {}
             for j, i in enumerate(idx):
                 out[i] = vals[j]
+                why = {"failures": failed[j]} if j in failed else {}
                 rec = self._record(start + i, thetas[i], vals[j], phases[i], batch, wall, len(idx), cost,
-                                   {"piece": c, **extras[i]})
+                                   {"piece": c, **extras[i], **why})
                 if self.path is not None:
                     append_jsonl(self.path, rec)
                 self.records.append(rec)

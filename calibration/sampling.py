@@ -142,7 +142,7 @@ def _round(spec, out_dir, thetas, y, disc, sim, progress, check_seed, var_scale=
     samples = res.samples()
     if s["coordinates"] == "logit":
         samples = post.to_theta(samples)
-    pred = predictive(emu, samples, targets, s["seed"])
+    pred = predictive(emu, samples, targets, s["seed"], space=space)
     wid = widths(samples, space, spec.prior, spec.sigma_ln)
     atomic_write_json(out_dir / "diagnostics.json", {
         **diag, "parameters": list(space.names), "n_samples": int(len(samples)),
@@ -151,7 +151,7 @@ def _round(spec, out_dir, thetas, y, disc, sim, progress, check_seed, var_scale=
     keys = ["target", "what", "unit", "measured", "median", "lower", "upper"]
     atomic_write_csv(out_dir / "predictive.csv", None, {k: [r[k] for r in pred] for k in keys})
     atomic_write_text(out_dir / "predictive.md", _fmt_rows(pred, keys))
-    wkeys = ["parameter", "prior_width_ln", "posterior_width_ln", "ratio", "median", "unit"]
+    wkeys = ["parameter", "prior_width_ln", "posterior_width_ln", "ratio", "median", "lower", "upper", "unit"]
     atomic_write_csv(out_dir / "widths.csv", None, {k: [r[k] for r in wid] for k in wkeys})
     order = list(np.argsort([r["ratio"] for r in wid]))
     plot_corner(samples, space.names, out_dir / "corner.png", order=order,

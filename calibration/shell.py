@@ -59,6 +59,7 @@ class ShellSimulator(Simulator):
         self.tire = make_tire(tire_spec)
         self.base = spec.base_params
         self.proto = Protocol.from_dict(parse_solver(solver or {}))
+        self._solver = solver
         self.devices = devices
         # targets grouped by (experiment, table): one experiment instance, several conditions
         from ..fingerprint import plain
@@ -102,6 +103,14 @@ class ShellSimulator(Simulator):
                                                "contact_subpoints": self.tire.spec.contact_subpoints},
                 "solver": plain(self.proto), "jtire": code_version()}
 
+    def for_targets(self, targets):
+        import dataclasses
+
+        spec = dataclasses.replace(self.spec, targets=tuple(targets), weights=(1.0,) * len(targets))
+        sim = ShellSimulator(spec, self.tire.spec, self._solver, self.devices)
+        sim.on_case = self.on_case
+        return sim
+
     def params(self, theta):
         return self.space.to_params(jnp.asarray(theta, dtype=jnp.float64), self.base)
 
@@ -110,6 +119,7 @@ class ShellSimulator(Simulator):
         n = len(thetas)
         out = np.full((n, len(self.response_names)), np.nan)
         plist = [self.params(th) for th in thetas]
+        self.last_failures = {}  # row -> {target: error message} of this call's failed cases
         total = n * sum(len(g["targets"]) for g in self.groups)
         done = [0]
         lock = threading.Lock()  # static experiments report from their own threads
@@ -136,6 +146,8 @@ class ShellSimulator(Simulator):
                     r = res[i * len(conds) + k]
                     if not isinstance(r, batch.CaseFailure):
                         out[i, j] = float(r.quantities[t.quantity])
+                    else:  # the point's row keeps a nan; the history records why
+                        self.last_failures.setdefault(i, {})[t.name] = str(r.error)
 
         # The static solves run case by case on one device each: with several devices, the static
         # experiments run at the same time, each on its own device (threads: JAX releases the GIL
@@ -156,7 +168,7 @@ class ShellSimulator(Simulator):
         for g in self.groups:
             if g["exp"].shardable:
                 run_group(g)
-        return out
+        return self.space.add_bias(thetas, out, self.response_names)  # what the targets measure
 
     def jacobian(self, theta, quantities=None):
         """(values (q,), J (q, d)) by autodiff, per experiment in the cheaper mode: forward mode
@@ -210,6 +222,9 @@ class ShellSimulator(Simulator):
         self.last_wall["jacobian"] = time.perf_counter() - t0
         if quantities is None:
             self.cost_forward_equivalents["jacobian"] = self.last_wall["jacobian"] / self._forward_wall + extra
+            if self.space.has_bias:  # the targets measure tire + bias (the tire's columns are 0 there)
+                B = self.space.bias_matrix(self.response_names)
+                values, J = values + B @ theta, J + B
         return values, J
 
 

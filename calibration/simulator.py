@@ -21,11 +21,15 @@ Contract (what an implementation must provide):
                                             the posterior check) call evaluate in pieces of this
                                             size and save each piece as it returns, so a kill
                                             loses at most one piece
+    last_failures: dict                     optional: after evaluate, {row: {target: message}} of
+                                            the points whose run failed (recorded in the history)
     jacobian(theta (d,), quantities=None) -> (values (q,), J (q, d))
                                             d(quantity)/d(theta) by autodiff at one point;
                                             quantities=None means response_names; any other name
                                             the simulator knows is allowed (sensitivity tables);
                                             may raise NotImplementedError
+    for_targets(targets) -> Simulator|None  the same model over other targets (optional; None:
+                                            not available), for the config's [checks]
     fingerprint() -> dict                   JSON-able description of everything besides the
                                             calibration config that fixes the numbers (mesh,
                                             solver settings, model version); stored with a
@@ -63,6 +67,11 @@ class Simulator(abc.ABC):
 
     def fingerprint(self) -> dict:
         return {"simulator": type(self).__name__}
+
+    def for_targets(self, targets):
+        """A simulator of the same model and free parameters over other targets (the config's
+        [checks]), or None where this simulator cannot simulate them."""
+        return None
 
 
 def check_batch(sim: Simulator, thetas, values) -> np.ndarray:

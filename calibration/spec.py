@@ -6,6 +6,9 @@ Layout (every field checked; a bad one is a ConfigError naming it, one line):
     description = "..."
     method = "arsm"                          # or "lm" (the gradient route)
     [targets.NAME] ...                       # calibration.targets
+    [checks.NAME] ...                        # optional: measured responses in the same form, not
+                                             # fitted: simulated once at the calibrated point and
+                                             # reported beside the targets (e.g. the footprint)
     [[free]] name = ..., factor|bounds = [lo, hi], why = "..."   # calibration.space
     [objective] weights = { NAME = 1.0 }     # optional; equal weights by default
     [arsm] budget, seed, batch_size, n_initial, surface, region_rule, fill, weighting,
@@ -32,7 +35,7 @@ from .targets import parse_targets
 __all__ = ["CalibrationSpec", "load_calibration", "ARSM_SCHEMA", "GRADIENT_SCHEMA", "METHODS"]
 
 METHODS = ("arsm", "lm")
-TOP_KEYS = {"tire_file", "description", "method", "targets", "free", "objective", "arsm",
+TOP_KEYS = {"tire_file", "description", "method", "targets", "checks", "free", "objective", "arsm",
             "gradient", "sensitivity", "anchor"}
 ARSM_SCHEMA = {
     "budget": F(int, 1, 2, 100000, 45, "evaluations"),
@@ -65,7 +68,8 @@ class CalibrationSpec:
     tire_path, tire_raw, tire: the tire file, its dict after overrides, its TireSpec;
     base_params: MaterialParams of the tire; space: ParamSpace; targets: tuple of Target;
     weights: (m,) objective weights; method: "arsm" or "lm"; arsm, gradient: option dicts;
-    sensitivity_quantities: names; anchor: {target: {"simulated", "error_percent"}} or {}.
+    sensitivity_quantities: names; anchor: {target: {"simulated", "error_percent"}} or {};
+    checks: tuple of Target reported at the calibrated point, not fitted.
     """
 
     path: Path
@@ -83,6 +87,7 @@ class CalibrationSpec:
     sensitivity_quantities: tuple
     anchor: dict
     description: str = ""
+    checks: tuple = ()
 
     @property
     def response_names(self) -> tuple:
@@ -128,7 +133,11 @@ def load_calibration(path, overrides=(), data_dir=None, tire_path=None) -> Calib
     if method not in METHODS:
         raise ConfigError(f"method = {method!r}: must be one of {METHODS}")
     targets = parse_targets(raw.get("targets"), data_dir)
-    space = ParamSpace.from_config(raw.get("free"), base)
+    checks = parse_targets(raw["checks"], data_dir, "checks") if "checks" in raw else ()
+    clash = sorted({t.name for t in targets} & {c.name for c in checks})
+    if clash:
+        raise ConfigError(f"checks.{clash[0]}: also a target; a response is fitted or checked, not both")
+    space = ParamSpace.from_config(raw.get("free"), base, targets=targets)
     names = [t.name for t in targets]
     obj = raw.get("objective", {})
     if not isinstance(obj, dict) or any(k != "weights" for k in obj):
@@ -169,4 +178,4 @@ def load_calibration(path, overrides=(), data_dir=None, tire_path=None) -> Calib
                            base_params=base, space=space, targets=targets, weights=weights,
                            method=method, arsm=arsm, gradient=gradient,
                            sensitivity_quantities=tuple(quantities), anchor=dict(anchor),
-                           description=desc if isinstance(desc, str) else "")
+                           description=desc if isinstance(desc, str) else "", checks=checks)

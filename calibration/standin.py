@@ -10,6 +10,7 @@ shell model:
   undertread modulus. Smooth, monotone, saturating (the series spring) in every modulus.
 - static lateral deflection  DY = F_y / k_lat,  k_lat = series(sidewall lateral, tread shear G
   growing with load^0.5).
+- footprint: half the chord of the free radius cut at DZ's deflection, a width growing with it.
 - rolling-resistance force  FX = RRC(F_z) F_z with RRC = sidewall and shoulder loss x deflection
   (so FX grows like F_z^1.x and softer sidewalls lose more) + tread loss x F_z^0.2 + crown loss.
 
@@ -77,8 +78,18 @@ def rolling_resistance(params, load_n):
     return rrc * load_n
 
 
+def footprint(params, load_n):
+    """Stand-in footprint (length, width), m, at vertical load load_n (N): half the chord of a 0.51 m
+    circle cut at the stand-in's deflection (the tread and belt spread a deflection; the shell model's
+    E01 patch is about half its geometric chord), and a width that grows from 0.30 m with it."""
+    delta = load_n / stiffnesses(params, load_n)[0]
+    return jnp.sqrt(2.0 * 0.5095 * delta - delta**2), 0.30 + 2.0 * delta
+
+
 def _response(params, target):
     exp, q, cond, table = target.experiment, target.quantity, target.condition, target.table
+    if exp == "footprint" and q in ("contact_length_m", "contact_width_m"):
+        return footprint(params, cond["load_N"])[q == "contact_width_m"]
     if exp == "vertical_stiffness" and q == "deflection_m":
         force = table.get("stated_load_kN") or cond["load_N"]
         return force / stiffnesses(params, force)[0]
@@ -118,9 +129,13 @@ class StandinSimulator(Simulator):
     def evaluate(self, thetas) -> np.ndarray:
         thetas = np.atleast_2d(np.asarray(thetas, dtype=float))
         t0 = time.perf_counter()
-        out = np.array(self._batch(jnp.asarray(thetas)))
+        out = self.space.add_bias(thetas, np.array(self._batch(jnp.asarray(thetas))), self.response_names)
+        self.last_failures = {}
         if self.fail is not None:
-            out[[bool(self.fail(th)) for th in thetas]] = np.nan
+            bad = [bool(self.fail(th)) for th in thetas]
+            out[bad] = np.nan
+            self.last_failures = {k: {n: "stand-in: a failed point (test)" for n in self.response_names}
+                                  for k, b in enumerate(bad) if b}
         self.n_points += thetas.shape[0]
         self.batches.append(thetas.shape[0])
         self.last_wall_s = time.perf_counter() - t0
@@ -139,7 +154,14 @@ class StandinSimulator(Simulator):
         th = jnp.asarray(np.asarray(theta, dtype=float))
         self.n_jacobians += 1
         vals, jac = self._jac[names](th)
-        return np.array(vals), np.array(jac)
+        vals, jac = np.array(vals), np.array(jac)
+        if quantities is None and self.space.has_bias:  # the targets measure tire + bias
+            B = self.space.bias_matrix(self.response_names)
+            vals, jac = vals + B @ np.asarray(theta, float), jac + B
+        return vals, jac
 
     def fingerprint(self) -> dict:
         return {"simulator": "standin", "note": "closed-form stand-in, not physics"}
+
+    def for_targets(self, targets):
+        return StandinSimulator(self.space, self.base, targets)

@@ -96,15 +96,15 @@ def _track_linear(load_n: float, data_dir=None) -> tuple:
                           f"{load_n / 1e3:g} kN (RRC = {fit.a:.5g} + {fit.b:.5g} Fz_N)")
 
 
-def parse_targets(raw, data_dir=None) -> tuple:
-    """[targets.*] -> tuple of Target, in config order."""
+def parse_targets(raw, data_dir=None, where: str = "targets") -> tuple:
+    """[targets.*] (or [checks.*], where="checks") -> tuple of Target, in config order."""
     from ..experiments import REGISTRY  # the experiments and their table schemas
 
     if not isinstance(raw, dict) or not raw:
-        raise ConfigError("targets: missing; give one table [targets.NAME] per measured response")
+        raise ConfigError(f"{where}: missing; give one table [{where}.NAME] per measured response")
     out = []
     for name, t in raw.items():
-        at = f"targets.{name}"
+        at = f"{where}.{name}"
         if not isinstance(t, dict):
             raise ConfigError(f"{at}: must be a table")
         for key in t:

@@ -13,7 +13,7 @@ from .gradient import calibrate_lm
 from .report import write_outputs
 from .runlog import RunLog, check_fingerprint
 
-__all__ = ["run_calibration", "HISTORY"]
+__all__ = ["run_calibration", "evaluate_checks", "HISTORY"]
 
 HISTORY = "history.jsonl"
 
@@ -54,7 +54,23 @@ def run_calibration(spec, sim, out_dir, method=None, budget=None, progress=None)
                            max_iterations=g["max_iterations"], lambda0=g["lambda0"],
                            tol_percent=g["tol_percent"], min_step=g["min_step"],
                            progress=progress)
+    checks = evaluate_checks(spec, sim, res.theta)
     title = (f"{spec.path.name}: {method}, {res.n_evaluations} evaluations "
              f"({res.cost_forward:.0f} forward-run equivalents), best total error "
              f"{res.total_error_pct:.3g} %")
-    return res, write_outputs(res, spec, out_dir, title, sim)
+    return res, write_outputs(res, spec, out_dir, title, sim, checks)
+
+
+def evaluate_checks(spec, sim, theta):
+    """The config's [checks] simulated once at theta: (values (k,) SI, note) or (None, note) when
+    there are none or the simulator cannot run them (the stand-in). Not part of the objective."""
+    import numpy as np
+
+    if not spec.checks:
+        return None, ""
+    if not np.all(np.isfinite(theta)):
+        return None, "checks: no calibrated point"
+    csim = sim.for_targets(spec.checks)
+    if csim is None:
+        return None, f"checks: {type(sim).__name__} cannot simulate them (not run)"
+    return csim.evaluate(np.asarray(theta, float)[None])[0], ""

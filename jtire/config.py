@@ -54,6 +54,8 @@ TIRE_SCHEMA = {
     "undertread": {"E_MPa": mpa(0.1, 1e3), "thickness_mm": mm(0.1, 50)},
     "tread": {"E_MPa": mpa(0.1, 1e3), "G_MPa": mpa(0.01, 1e3), "loss": Field(float, 1, 0, 2), "friction": Field(float, 1, 0, 3)},
     "viscoelastic": {"relaxation_times_ms": Field(list, U.MS, 1e-3, 1e4, unit="ms")},
+    # the study's explicit-code model form, not tire physics (optional table; 0 = off)
+    "model_form": {"nodal_damping_per_s": Field(float, 1, 0, 100, 0.0, "1/s")},
     "reference": {  # measured values reported beside the simulated ones; never used by the physics
         "belt_Iy_kgm2": Field(float, 1, 0, 1e4, 0.0), "belt_Ix_kgm2": Field(float, 1, 0, 1e4, 0.0),
         "footprint_length_mm": mm(0, 5000, 0.0), "footprint_width_mm": mm(0, 5000, 0.0),
@@ -136,6 +138,7 @@ class TireSpec:
     friction: float
     relaxation_times: tuple
     reference: dict
+    nodal_damping: float = 0.0  # 1/s: mass-proportional damping on road-frame velocity (the study's form)
 
 
 def _check_geometry(g: Geometry) -> None:
@@ -205,7 +208,7 @@ def tire_from_dict(raw: dict) -> TireSpec:
         undertread_E=v["undertread"]["E_MPa"], undertread_thickness=v["undertread"]["thickness_mm"],
         tread_E=v["tread"]["E_MPa"], tread_G=v["tread"]["G_MPa"], tread_loss=v["tread"]["loss"],
         friction=v["tread"]["friction"], relaxation_times=v["viscoelastic"]["relaxation_times_ms"],
-        reference=v["reference"],
+        reference=v["reference"], nodal_damping=v["model_form"]["nodal_damping_per_s"],
     )
 
 

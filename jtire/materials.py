@@ -35,6 +35,19 @@ def prony_weights(relaxation_times, band_hz=(1.0, 100.0)) -> np.ndarray:
     return np.full(tau.shape, 1.0 / shape.mean())
 
 
+def dynamic_modulus(loss, relaxation_times, f_hz) -> tuple:
+    """(tan delta, E'/K) of a part with loss parameter `loss` at frequency f_hz: what its Prony series
+    (weights `prony_weights`) gives exactly, E* / K = 1 + sum_b c_b loss i w tau_b / (1 + i w tau_b).
+    `loss` is the band-averaged small-loss tan delta; at one frequency the true one differs."""
+    tau = np.asarray(relaxation_times, float)
+    c = prony_weights(tau)
+    wt = 2 * np.pi * np.asarray(f_hz, float)[..., None] * tau
+    k = np.asarray(loss, float)[..., None] * c
+    storage = 1.0 + np.sum(k * wt**2 / (1 + wt**2), axis=-1)
+    lossmod = np.sum(k * wt / (1 + wt**2), axis=-1)
+    return lossmod / storage, storage
+
+
 class MaterialParams(eqx.Module):
     """Per-part (P = 6 parts, `jtire.mesh.PART_NAMES`) and tread parameters, SI.
 
@@ -50,6 +63,8 @@ class MaterialParams(eqx.Module):
     tread_loss:        loss tangent of the tread rubber
     friction:          Coulomb friction coefficient tread-road
     relaxation_times:  (B,) s, Maxwell branch relaxation times (static: they fix the branch layout)
+    nodal_damping:     1/s, mass-proportional damping on every tire node's road-frame velocity: the
+                       study's explicit-code model form, not tire physics; 0 (off) by default
     """
 
     E_meridional: Float[Array, " P"]
@@ -65,6 +80,7 @@ class MaterialParams(eqx.Module):
     tread_loss: Float[Array, ""]
     friction: Float[Array, ""]
     relaxation_times: tuple = eqx.field(static=True)
+    nodal_damping: Float[Array, ""] = eqx.field(default_factory=lambda: jnp.zeros(()))
 
     def __check_init__(self):
         for name in ("E_meridional", "E_circumferential", "G_shear", "E_bending", "thickness", "loss"):
@@ -86,5 +102,6 @@ class MaterialParams(eqx.Module):
 
     def without_damping(self) -> "MaterialParams":
         """The same material with every loss set to zero (for energy-conservation checks)."""
-        return eqx.tree_at(lambda m: (m.loss, m.tread_loss), self,
-                           (jnp.zeros_like(self.loss), jnp.zeros_like(self.tread_loss)))
+        return eqx.tree_at(lambda m: (m.loss, m.tread_loss, m.nodal_damping), self,
+                           (jnp.zeros_like(self.loss), jnp.zeros_like(self.tread_loss),
+                            jnp.zeros_like(self.nodal_damping)))

@@ -26,6 +26,7 @@ def params_from_spec(spec: TireSpec) -> MaterialParams:
         undertread_E=jnp.asarray(spec.undertread_E), undertread_thickness=jnp.asarray(spec.undertread_thickness),
         tread_E=jnp.asarray(spec.tread_E), tread_G=jnp.asarray(spec.tread_G), tread_loss=jnp.asarray(spec.tread_loss),
         friction=jnp.asarray(spec.friction), relaxation_times=tuple(spec.relaxation_times),
+        nodal_damping=jnp.asarray(spec.nodal_damping, dtype=jnp.float64),
     )
 
 

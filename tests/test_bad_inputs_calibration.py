@@ -9,6 +9,16 @@ from .bad_input_harness import (
     Case, check_one_line, COMPETITION, POSTERIOR, STUDY, TRACK, _blocked, _comp, _compete_claimed,
     _compete_foreign_history, _data_dir, _exact_track, _out, _track_sub, _w)
 
+def _biased(tmp, bounds, targets='["FX1", "FX2"]'):
+    """study.toml beside the shipped tire, its bias entry (free[20]) renamed bias.drag with these bounds
+    and targets."""
+    text = Path(STUDY).read_text().replace('tire_file = "../tires/xone_xda.toml"',
+                                           f'tire_file = "{Path(STUDY).parent.parent / "tires" / "xone_xda.toml"}"')
+    old = 'name = "bias.non_tire_drag"\nbounds = [0.0, 3000.0]\ntargets = ["FX1", "FX2"]\n'
+    assert old in text
+    return _w(tmp, "biased.toml", text.replace(old, f'name = "bias.drag"\n{bounds}\ntargets = {targets}\n'))
+
+
 CASES = [
     # ---- data ------------------------------------------------------------------------------------
     Case("data-non-utf8-csv", lambda t: ["data", "--data-dir", _data_dir(t, track=TRACK.encode() + b"9,\xff\n"),
@@ -110,6 +120,16 @@ CASES = [
     Case("calibrate-tire-error-names-file", lambda t: ["calibrate", STUDY, "--standin", "--set",
                                                        "tire.tire.crown_radius_mm=50", *_out(t)],
          "tire file xone_xda.toml: tire.tire.crown_radius_mm = 50"),
+    # the rolling-resistance bias (calibration.space bias.*): non-negative, on named targets of one unit
+    Case("calibrate-bias-negative", lambda t: ["calibrate", _biased(t, "bounds = [-5.0, 3000.0]"), "--standin",
+                                               *_out(t)], "free[20].bounds = [-5.0, 3000.0] (bias.drag)", "0 <= lo < hi"),
+    Case("calibrate-bias-unknown-target", lambda t: ["calibrate", _biased(t, "bounds = [0.0, 3000.0]", '["FX3"]'),
+                                                     "--standin", *_out(t)], "free[20].targets", "'FX3' is not a target"),
+    Case("calibrate-bias-mixed-units", lambda t: ["calibrate", _biased(t, "bounds = [0.0, 3000.0]", '["DZ", "FX1"]'),
+                                                  "--standin", *_out(t)], "free[20].targets", "one unit"),
+    Case("calibrate-negative-nodal-damping", lambda t: ["calibrate", STUDY, "--standin", "--set",
+                                                        "tire.model_form.nodal_damping_per_s=-1", *_out(t)],
+         "tire file xone_xda.toml: tire.model_form.nodal_damping_per_s = -1", "[0, 100]"),
     Case("calibrate-budget-zero", lambda t: ["calibrate", STUDY, "--standin", "--budget", "0", *_out(t)],
          "--budget = 0: must be >= 1"),
     Case("calibrate-unknown-key", lambda t: ["calibrate", STUDY, "--standin", "--set", "colour=1", *_out(t)],

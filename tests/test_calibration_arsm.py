@@ -82,16 +82,18 @@ def test_lm_takes_the_step_it_can_pay_for(synthetic):
     assert res.cost_forward <= cj + ce + 0.5 * cj
 
 
-def test_study_problem_20_parameters(study):
-    """The shipped config (20 parameters, 45 evaluations): from 135 % at the base tire to a few
-    percent (benchmark median 1.9 %, q75 4.7 % over 10 seeds); LM meets every target."""
+def test_study_problem_21_parameters(study):
+    """The shipped config (20 tire parameters and the drag bias, 45 evaluations): from 135 % at the
+    base tire to a few percent (measured 2.2 % at seed 0); LM meets every target (measured: 45
+    iterations; on the stand-in the loss tangents alone can meet FX, so b ends at its bound 0 and
+    LM creeps along that face)."""
     sim = StandinSimulator(study.space, study.base_params, study.targets)
     res = calibrate_arsm(sim, study.targets, RunLog(sim, study.targets, None, "arsm", 0, 45))
     assert res.records[0]["total_error_pct"] > 100  # the base tire, evaluated first
     assert res.total_error_pct < 10
     assert max(sim.batches[1:]) <= 4 and sim.batches[0] == study.space.d + 2  # batches as designed
     lm = calibrate_lm(sim, study.targets, RunLog(sim, study.targets, None, "lm", 0, 10**9),
-                      tol_percent=0.01)
+                      tol_percent=0.01, max_iterations=100)
     assert lm.stop_reason == "target" and lm.total_error_pct <= 0.01
 
 
@@ -198,7 +200,10 @@ def test_run_calibration_outputs_and_fingerprint(tmp_path, study):
     from jtire.tire import params_from_spec
 
     tire2 = load_tire(tmp_path / "calibrated_tire.toml")
-    np.testing.assert_allclose(spec2.space.from_params(params_from_spec(tire2)), res.theta, atol=1e-5)
+    tire_idx = spec2.space.tire_indices  # the bias (FX = FX_tire + b) is not part of the tire
+    assert len(tire_idx) == spec2.space.d - 1
+    np.testing.assert_allclose(spec2.space.from_params(params_from_spec(tire2))[tire_idx],
+                               res.theta[tire_idx], atol=1e-5)
     # a larger budget resumes (replays 26, runs 4 more); other settings refuse
     res2, _ = run_calibration(study, StandinSimulator(study.space, study.base_params, study.targets),
                               tmp_path, budget=30)
@@ -216,4 +221,7 @@ def test_failed_points_are_recorded_and_skipped(study):
     res = calibrate_arsm(sim, study.targets, log)
     failed = [r for r in res.records if r["total_error_pct"] is None]
     assert failed and all(r["responses"]["DZ"] is None for r in failed)
+    # and says why (the simulator's message per target; the shell model's is the run's own error)
+    assert all(r["failures"]["DZ"].startswith("stand-in: a failed point") for r in failed)
+    assert not any("failures" in r for r in res.records if r["total_error_pct"] is not None)
     assert np.isfinite(res.total_error_pct) and res.n_evaluations == 30

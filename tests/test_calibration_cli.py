@@ -100,9 +100,16 @@ def test_calibrate_and_sensitivity_on_the_standin(tmp_path, capsys):
     capsys.readouterr()
     check = json.loads((tmp_path / "check" / "check_tire.json").read_text())
     best = json.loads((out / "summary.json").read_text())["responses_SI"]
-    for row in check["rows"][:-1]:
-        t = next(t for t in load_calibration(CAL / "study.toml", []).targets if t.name == row["target"])
+    # (the drag bias b of FX1 and FX2 is read back from summary.json beside the tire: FX = FX_tire + b)
+    targets = {t.name: t for t in load_calibration(CAL / "study.toml", []).targets}
+    rows = [r for r in check["rows"] if r["target"] in targets]
+    assert [r["target"] for r in rows] == list(targets)
+    for row in rows:
+        t = targets[row["target"]]
         assert row["simulated"] * t.unit_factor == pytest.approx(best[row["target"]], rel=1e-6)
+    # the footprint checks are reported beside the targets (the stand-in's closed-form footprint)
+    fl = next(r for r in check["rows"] if r["target"] == "FL (check)")
+    assert fl["measured"] == pytest.approx(200.12) and 100 < fl["simulated"] < 400 and not fl["note"]
     # a rerun with other settings refuses in one line
     _one_line_error(capsys, ["calibrate", str(CAL / "study.toml"), "--standin", "--out", str(out),
                              "--set", "arsm.seed=4"], "holds results made with other settings (differs in options.seed)")

@@ -55,6 +55,8 @@ COVERED = {
     r"jtire calibrate configs/calibration/study\.toml --check-tire runs/calibrate/study/calibrated_tire\.toml":
         "test_calibrate_sensitivity_sample",
     r"jtire calibrate configs/calibration/study\.toml --method gradient --out runs/calibrate/study_lm": "test_calibrate_lm",
+    r"jtire calibrate configs/calibration/(study_footprint|study_replication|track)\.toml --out runs/calibrate/\w+":
+        "test_calibrate_other_configs",
     r"jtire export-tir( \S+)*": "test_export_tir",
     r"python paper_figures/(fig\w+)\.py": "test_figure_scripts",
     r"python paper_figures/fig[56]_\w+\.py --from runs/characterize": "test_characterize",
@@ -342,6 +344,17 @@ def test_calibrate_lm(user_dir, capsys):
     cmd = "jtire calibrate configs/calibration/study.toml --method gradient --out runs/calibrate/study_lm"
     assert jtire(cmd, "--standin", "--budget", "12") == 0
     assert "lm:" in capsys.readouterr().out
+
+
+def test_calibrate_other_configs(user_dir, capsys):
+    """The footprint as targets, the study's model form (nodal damping), the track's rolling resistance:
+    on the stand-in (which has a closed-form footprint, but no nodal damping: alpha does nothing there)."""
+    for name in ("study_footprint", "study_replication", "track"):
+        cmd = f"jtire calibrate configs/calibration/{name}.toml --out runs/calibrate/{name}"
+        assert jtire(cmd, "--standin", "--budget", "30") == 0, name
+        text = capsys.readouterr().out
+        assert "| total |" in text and "30 evaluations" in text, name
+    assert "| FL | footprint | 200.12 mm |" in (user_dir / "runs" / "calibrate" / "study_footprint" / "table_4_4.md").read_text()
 
 
 def test_export_tir(user_dir, capsys):

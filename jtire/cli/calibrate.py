@@ -94,9 +94,7 @@ def run_cli(args, say) -> int:
 
     method = "lm" if args.method == "gradient" else args.method
     res, paths = run_calibration(spec, sim, out, method, args.budget, progress)
-    from ..calibration.report import format_markdown, table_4_4
-
-    say(format_markdown(table_4_4(res, spec)).rstrip())
+    say(paths["table_md"].read_text().rstrip())
     say(f"{res.method}: {res.n_evaluations} evaluations and {res.n_jacobians} Jacobian calls in "
         f"{res.n_batches} batches, "
         f"{res.cost_forward:.0f} forward-run equivalents, simulator wall {res.wall_s:.1f} s; "
@@ -128,17 +126,23 @@ def _check_tire(args, say) -> int:
     sim = simulator_for(spec, args.standin, say)
     if sim is None:
         return 2
+    theta = np.array(spec.space.default, float)
+    if spec.space.has_bias:  # the bias is not in the tire file: the calibration's summary holds it
+        theta, where = _biases_beside(tire, spec.space, theta)
+        say(where)
     t0 = time.perf_counter()
-    values = sim.evaluate(spec.space.default[None])[0]
+    values = sim.evaluate(theta[None])[0]
     wall = time.perf_counter() - t0
     if not np.all(np.isfinite(values)):
         bad = [n for n, v in zip(spec.response_names, values) if not np.isfinite(v)]
         say(f"jtire calibrate: error: --check-tire: the simulation of {', '.join(bad)} failed on {tire}", err=True)
         return 2
     errs = percent_errors(values, spec.targets)
-    res = types.SimpleNamespace(values=values, errors_pct=errs,
+    res = types.SimpleNamespace(values=values, errors_pct=errs, theta=theta,
                                 total_error_pct=float(total_error(values[None], spec.targets, spec.weights)[0]))
-    rows = table_4_4(res, spec)
+    from ..calibration.tire_calibration import evaluate_checks
+
+    rows = table_4_4(res, spec, evaluate_checks(spec, sim, theta))
     text = format_markdown(rows)
     say(f"{tire}: the targets of {Path(args.config).name} simulated in {wall:.1f} s "
         f"(mesh {spec.tire.n_theta} x {spec.tire.n_side} x {spec.tire.n_crown})")
@@ -151,3 +155,33 @@ def _check_tire(args, say) -> int:
                                                     "simulator": sim.fingerprint()})
         say(f"wrote {out / 'check_tire.md'}, {out / 'check_tire.json'}")
     return 0
+
+
+def _biases_beside(tire, space, theta):
+    """theta with the bias entries read from the calibration's summary.json beside TIRE (the
+    folder `jtire calibrate` wrote it to); (theta, one line saying where the biases came from)."""
+    import json
+
+    import numpy as np
+
+    from ..errors import ConfigError
+
+    path = tire.parent / "summary.json"
+    names = [space.names[j] for j in range(space.d) if space.is_bias(j)]
+    if not path.is_file():
+        return theta, (f"biases {', '.join(names)}: no {path.name} beside the tire; taken at their "
+                       "lower bounds (the simulated values are the tire's own plus those)")
+    try:
+        got = json.loads(path.read_text()).get("bias_SI", {})
+    except (OSError, ValueError) as e:
+        raise ConfigError(f"{path}: unreadable ({e})") from None
+    theta = np.array(theta, float)
+    missing = [n for n in names if n not in got]
+    if missing:
+        raise ConfigError(f"{path}: bias_SI has no {', '.join(missing)}; it was written by another "
+                          "calibration config")
+    for j in range(space.d):
+        if space.is_bias(j):
+            theta[j] = float(got[space.names[j]][0])
+    return theta, f"biases from {path}: " + ", ".join(
+        f"{n} = {theta[space.names.index(n)]:.6g} {got[n][1]}" for n in names)

@@ -101,7 +101,7 @@ def observe(model, params, setup, u) -> dict:
     _, d = RR.rolling_forces(model, params, setup, u)
     q = R.unpack(model, u, False)[1]
     keys = ("tire_on_rim", "contact_force", "contact_moment", "omega", "power_rubber", "power_contact_damping",
-            "power_friction", "n_contact")
+            "power_friction", "power_nodal_damping", "n_contact")
     return {"q": q} | {k: d[k] for k in keys}
 
 

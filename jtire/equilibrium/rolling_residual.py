@@ -187,8 +187,8 @@ def rolling_forces(model, params, setup, u):
     rim; the spin row: the torque balance), DUMMY_SCALE (u - target) on held DOFs.
 
     diagnostics: tire_on_rim (6,) (N, N m; the hub dynamometer), contact_force (3,), contact_moment
-    (3,) about the wheel centre, omega (rad/s), power_rubber, power_contact_damping, power_friction
-    (W), n_contact, and the fields (P, F, F_n, gap, z) at the tread points."""
+    (3,) about the wheel centre, omega (rad/s), power_rubber, power_contact_damping, power_friction,
+    power_nodal_damping (W), n_contact, and the fields (P, F, F_n, gap, z) at the tread points."""
     x, q, omega = _unknowns(model, setup, u)
     T = model.n_theta
     dtheta = 2 * np.pi / T
@@ -239,6 +239,14 @@ def rolling_forces(model, params, setup, u):
     g = setup.gravity
     lap = (x.roll(-1, 0) - x * 2.0 + x.roll(1, 0)) * (omega**2 / dtheta**2)
     rx = rx + lap * m - V(m * g[0], m * g[1], m * g[2])
+    # the study's explicit-FE model form (params.nodal_damping, 0 = off): a force -alpha m v_g on every
+    # node, v_g its velocity relative to the road's frame (the flow's -Omega dX/dtheta less the road's)
+    v_road = setup.surface.frame_velocity()
+    zero = jnp.zeros_like(m)
+    v_g = (x.roll(-1, 0) - x.roll(1, 0)) * (-omega / (2 * dtheta)) - V(zero + v_road[0], zero + v_road[1],
+                                                                         zero + v_road[2])
+    rx = rx + v_g * (params.nodal_damping * m)
+    p_nodal = params.nodal_damping * jnp.sum(m * dot(v_g, v_g))
     f_rim = setup.rim_force + jnp.concatenate([g * model.rim_mass, jnp.zeros(3)])
     r = R.pack(rx, rq - f_rim)
     mask = jnp.concatenate([jnp.ones(r.shape[0] - 6), setup.rim_free])
@@ -249,6 +257,7 @@ def rolling_forces(model, params, setup, u):
     centre = V(q[0], q[1], q[2])
     diag = dict(tire_on_rim=-rq, contact_force=F.sum().array(), contact_moment=cross(P - centre, F).sum().array(),
                 omega=omega, power_rubber=p_rubber, power_contact_damping=p_damp, power_friction=p_fric,
+                power_nodal_damping=p_nodal,
                 n_contact=jnp.sum(inside.astype(jnp.float64)), P=P, F=F, F_n=F_n, gap=gap, z=z)
     return r * mask + dummy, diag
 

@@ -87,7 +87,7 @@ class RollingResistance(Rolling):
               "error_vs_target_rel")
     TRANSIENT = ("rolling_resistance_stderr_N", "rolling_resistance_std_N", "unaccounted_power_W",
                  "dissipated_power_halves_rel_diff", "window_s")
-    STEADY = ("viscoelastic_power_W", "tread_damping_power_W")
+    STEADY = ("viscoelastic_power_W", "tread_damping_power_W", "nodal_damping_power_W")
     quantity_names = COMMON + STEADY
 
     calibration: tuple = eqx.field(static=True, default=())
@@ -114,7 +114,7 @@ class RollingResistance(Rolling):
         if self.method == "steady":
             lv = jax.tree_util.tree_map(lambda a: a[-1], outputs[0]["levels"])
             drag = -lv["tire_on_rim"][0]
-            power = lv["power_rubber"] + lv["power_contact_damping"] + lv["power_friction"]
+            power = ST.lost_power(lv)
             return {"rolling_resistance_N": drag, "rolling_resistance_from_power_N": power / self.speed,
                     "rrc": drag / lv["contact_force"][2]}
         ms = jax.tree_util.tree_map(lambda a: a[-1], outputs[0]["phases"])
@@ -186,6 +186,6 @@ class RollingResistance(Rolling):
         lvs = jax.tree_util.tree_map(np.asarray, out["levels"])
         sig = {"level": np.arange(len(names)), "vertical_force_N": lvs["contact_force"][:, 2],
                "drag_N": -lvs["tire_on_rim"][:, 0], "spin_rad_per_s": lvs["omega"], "rim_z_m": lvs["q"][:, 2],
-               "lost_power_W": lvs["power_rubber"] + lvs["power_contact_damping"] + lvs["power_friction"]}
+               "lost_power_W": ST.lost_power(lvs)}
         info |= {"level_names": names, "steady_subpoints": self.subpoints}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)

@@ -73,11 +73,21 @@ def summary(where, infos, names) -> tuple:
     return checks, info | {"levels": int(len(infos.converged))}
 
 
+def lost_power(level):
+    """Every loss of a level (or stacked levels), W: Maxwell branches, tread normal damping, sliding and
+    the study's nodal damping (0 unless the tire file turns it on). Traced or host arrays."""
+    return (level["power_rubber"] + level["power_contact_damping"] + level["power_friction"]
+            + level["power_nodal_damping"])
+
+
 def losses(level) -> dict:
-    """The lost powers (W) of one level: Maxwell branches, tread normal damping, sliding, in all."""
-    rub, damp, fric = (float(level[k]) for k in ("power_rubber", "power_contact_damping", "power_friction"))
+    """The lost powers (W) of one level: Maxwell branches, tread normal damping, sliding, the study's
+    nodal damping, in all."""
+    rub, damp, fric, nodal = (float(level[k]) for k in ("power_rubber", "power_contact_damping",
+                                                        "power_friction", "power_nodal_damping"))
     return {"viscoelastic_power_W": rub, "tread_damping_power_W": damp, "rubber_power_W": rub + damp,
-            "friction_power_W": fric, "dissipated_power_W": rub + damp + fric}
+            "friction_power_W": fric, "nodal_damping_power_W": nodal,
+            "dissipated_power_W": rub + damp + fric + nodal}
 
 
 def require_energy_balance(where, drag, power, speed, tol=ENERGY_BALANCE_TOL) -> float:

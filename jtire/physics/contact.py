@@ -31,6 +31,11 @@ class AbstractSurface(eqx.Module):
         """P: V of (N,) points. Returns gap (N,) (positive = apart), the surface's outward unit
         normal (V) and its material velocity at the closest point (V)."""
 
+    def frame_velocity(self):
+        """(3,) m/s: the velocity of the road's frame (the ground the tire rolls on, seen from the
+        axle): what the study's nodal damping takes velocities relative to. Still by default."""
+        return jnp.zeros(3)
+
 
 class FlatRoad(AbstractSurface):
     """The plane z = height (internal z up), moving with `velocity` (a belt under the tire)."""
@@ -44,6 +49,9 @@ class FlatRoad(AbstractSurface):
         n = V(zero, zero, zero + 1.0)
         v = V(zero + self.velocity[0], zero + self.velocity[1], zero + self.velocity[2])
         return gap, n, v
+
+    def frame_velocity(self):
+        return jnp.asarray(self.velocity)
 
 
 class NoSurface(AbstractSurface):

@@ -57,6 +57,10 @@ class Drum(AbstractSurface):
         gap, n, Q = _cylinder(P, self.centre_x, self.centre_z, self.radius)
         return gap, n, _rigid_velocity(self.omega, self.centre_x, self.centre_z, Q)
 
+    def frame_velocity(self):
+        """The drum's surface velocity at its top, where the tire stands: (omega r, 0, 0)."""
+        return jnp.stack([self.omega * self.radius, jnp.zeros_like(self.radius), jnp.zeros_like(self.radius)])
+
 
 class FreeDrum(AbstractSurface):
     """A rigid drum that spins with its own inertia (E06): radius, axle at (centre_x, centre_z) (m),
@@ -78,6 +82,10 @@ class FreeDrum(AbstractSurface):
     def query(self, P, t):
         gap, n, Q = _cylinder(P, self.centre_x, self.centre_z, self.radius)
         return gap, n, _rigid_velocity(self.omega, self.centre_x, self.centre_z, Q)
+
+    def frame_velocity(self):
+        """The drum's surface velocity at its top, where the tire stands: (omega r, 0, 0)."""
+        return jnp.stack([self.omega * self.radius, jnp.zeros_like(self.radius), jnp.zeros_like(self.radius)])
 
     def acceleration(self, P, F):
         """Angular acceleration (rad/s^2) of the drum under the reaction -F of the contact forces F (V,
@@ -133,6 +141,9 @@ class DrumWithCleat(AbstractSurface):
         c = gc < gd
         pick = lambda a, b: V(jnp.where(c, a.x, b.x), jnp.where(c, a.y, b.y), jnp.where(c, a.z, b.z))  # noqa: E731
         return jnp.minimum(gc, gd), pick(nc, nd), pick(vc, vd)
+
+    def frame_velocity(self):
+        return self.drum.frame_velocity()
 
 
 # ---- builders (host side: validate plain numbers, then make array leaves) ---------------------

@@ -72,6 +72,14 @@ def evaluate(model, params, drive, t, y):
     fq = fq - jnp.concatenate([fdf.sum().array(), cross(r, fdf).sum().array()])
     fx = fx + f_d
     p_settle = -jnp.sum(dot(f_d, v_rel))
+    # the study's explicit-FE model form (params.nodal_damping, 0 = off): mass-proportional damping on
+    # every tire node's velocity relative to the road's frame; its loss counts as dissipated
+    v_road = surface.frame_velocity()
+    zero = jnp.zeros_like(m)
+    v_g = y.v - V(zero + v_road[0], zero + v_road[1], zero + v_road[2])
+    f_nodal = v_g * (-params.nodal_damping * m)
+    fx = fx + f_nodal
+    p_nodal = -jnp.sum(dot(f_nodal, v_g))
 
     if drive.belt_loaded:
         fx = fx + belt_load_forces(y.x, m, model.belt_mask, drive.belt_load(t))
@@ -84,7 +92,7 @@ def evaluate(model, params, drive, t, y):
         ax = fx / m + V(g[0], g[1], g[2])
     aq = (fq + drive.rim_force(t) + g6) / M_rim
 
-    upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread, p_settle, p_slide, drum_acc)
+    upd = Update(ax, aq, maxwell, bristle, p_visc + p_tread + p_nodal, p_settle, p_slide, drum_acc)
     d = s - model.s0
     # fq: generalized force (N, N m about the rim centre) of the tire on the rim: beads, the
     # pressure on the rim closure and the reaction of rim-frame damping. It is what a hub
