@@ -1,6 +1,7 @@
 """Sensitivities: d(quantity)/d(ln parameter), as a table, a heat map and singular values.
 
-The simulator's Jacobian J = dq/dtheta (theta = ln parameter) at one point is reported as is
+The simulator's Jacobian J = dq/dtheta (theta = ln parameter; a linearly searched one, theta = p,
+has its column multiplied by p, so that it too is dq/d ln p) at one point is reported as is
 (units of the quantity per unit relative change of the parameter) and as elasticities
 E = J / q = d ln q / d ln p (dimensionless: +1 means "1 % more parameter, 1 % more quantity").
 
@@ -35,7 +36,12 @@ class Sensitivity:
 def compute(sim, theta, quantities=None) -> Sensitivity:
     """Ask the simulator for values and Jacobian of `quantities` (default: its responses)."""
     q = tuple(sim.response_names if quantities is None else quantities)
-    vals, jac = sim.jacobian(np.asarray(theta, float), None if q == tuple(sim.response_names) else q)
+    theta = np.asarray(theta, float)
+    vals, jac = sim.jacobian(theta, None if q == tuple(sim.response_names) else q)
+    jac = np.array(jac, float)
+    for j in range(sim.space.d):  # a linear parameter (theta = p): dq/dp p = dq/d ln p
+        if getattr(sim.space, "is_linear", lambda _: False)(j):
+            jac[:, j] *= theta[j]
     return Sensitivity(sim.space.names, q, theta, vals, jac)
 
 

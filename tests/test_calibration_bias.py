@@ -195,3 +195,18 @@ def test_the_emulator_learns_the_tire_and_adds_the_bias(study):
     m2, _ = fit_emulator(plain, sim.response_names, train, y_train, ("linear", "reduced")).predict(test)
     rms = lambda m: float(np.sqrt(np.mean((m[:, 2:] - np.log(y[:, 2:])) ** 2)))  # noqa: E731
     assert rms(mu) < 0.75 * rms(m2)
+
+
+def test_sensitivities_of_a_linear_parameter_are_elasticities_too(study):
+    """theta of a bias is b itself, so the sensitivity table scales its column by b: d ln FX / d ln b =
+    b / FX exactly (FX = FX_tire + b), like every log-space parameter's column."""
+    from jtire.calibration.sensitivity import compute
+
+    sim = StandinSimulator(study.space, study.base_params, study.targets)
+    th = study.space.default.copy()
+    j = study.space.names.index("bias.non_tire_drag")
+    th[j] = 750.0
+    sens = compute(sim, th)
+    fx = sim.evaluate(th[None])[0]
+    np.testing.assert_allclose(sens.elasticity[2:, j], 750.0 / fx[2:], rtol=1e-12)
+    assert np.all(sens.elasticity[:2, j] == 0.0)
