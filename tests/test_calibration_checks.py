@@ -58,6 +58,7 @@ def test_bad_checks_are_one_line(tmp_path, edit, words):
         load_calibration(cfg)
 
 
+@pytest.mark.slow  # 51 s with a cold compile cache (E02 and E01 through the CLI's own tire)
 def test_check_tire_reports_the_footprint_on_the_shell_model(tmp_path, capsys):
     # coarse ring, one E02 solve and one E01 solve at rated. The footprint of the default tire is
     # ~0.2 m long and ~0.35 m wide (E01 on the default mesh: 207 x 357 mm); the coarse ring's
