@@ -36,6 +36,8 @@ def predictive(emulator, samples, targets, seed: int = 0, level: float = 0.9, sp
     ly = mu + np.sqrt(np.maximum(var, 0)) * rng.standard_normal(mu.shape)
     y = np.exp(ly)
     q = [50, 50 * (1 - level), 50 * (1 + level)]
+    B = space.bias_matrix([t.name for t in targets]) if space is not None and space.has_bias else None
+    mt, vt = emulator.predict_tire(samples) if B is not None else (None, None)
     rows = []
     for i, t in enumerate(targets):
         med, lo, hi = np.percentile(y[:, i], q)
@@ -48,12 +50,10 @@ def predictive(emulator, samples, targets, seed: int = 0, level: float = 0.9, sp
         if label != t.name:
             rows.append({"target": t.name, "what": label, "unit": unit, "measured": float(dm),
                          "median": dmed, "lower": min(dlo, dhi), "upper": max(dlo, dhi)})
-        b = None if space is None or not space.has_bias else (
-            samples @ space.bias_matrix([tt.name for tt in targets])[i])
-        if b is not None and np.any(space.bias_matrix([tt.name for tt in targets])[i]):
+        if B is not None and np.any(B[i]):
+            b = samples @ B[i]
             # the tire's own response from the emulator of the tire (not draw minus bias: the two
             # draws' noises would not cancel)
-            mt, vt = emulator.predict_tire(samples)
             tire = np.exp(mt[:, i] + np.sqrt(np.maximum(vt[:, i], 0)) * rng.standard_normal(len(samples)))
             for what, v in (("tire alone", tire), ("bias", b)):
                 med, lo, hi = np.percentile(v, q)

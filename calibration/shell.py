@@ -222,9 +222,8 @@ class ShellSimulator(Simulator):
         self.last_wall["jacobian"] = time.perf_counter() - t0
         if quantities is None:
             self.cost_forward_equivalents["jacobian"] = self.last_wall["jacobian"] / self._forward_wall + extra
-            if self.space.has_bias:  # the targets measure tire + bias (the tire's columns are 0 there)
-                B = self.space.bias_matrix(self.response_names)
-                values, J = values + B @ theta, J + B
+            # the targets measure tire + bias (the tire's columns are 0 there)
+            values, J = self.space.add_bias_jacobian(theta, values, J, self.response_names)
         return values, J
 
 

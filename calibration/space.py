@@ -137,6 +137,13 @@ class ParamSpace:
             return values
         return values + np.atleast_2d(np.asarray(thetas, float)) @ self.bias_matrix(response_names).T
 
+    def add_bias_jacobian(self, theta, values, J, response_names) -> tuple:
+        """(values, J) of the tire at theta (d,) -> what the targets measure: + b and + dB/dtheta."""
+        if not self.has_bias:
+            return values, J
+        B = self.bias_matrix(response_names)
+        return values + B @ np.asarray(theta, float), J + B
+
     def biases(self, theta) -> dict:
         """{name: (b in SI, unit, target names)} of the bias entries at theta (d,)."""
         theta = np.asarray(theta, float)
