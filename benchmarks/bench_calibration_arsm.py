@@ -2,7 +2,7 @@
 
 The problem: configs/calibration/study.toml (20 free parameters in log space, the study's four
 targets, equal weights), budget 45 evaluations. The responses come from
-calibration.standin (closed-form, smooth monotone power laws and series springs of the moduli,
+calibration.tire.standin (closed-form, smooth monotone power laws and series springs of the moduli,
 rolling resistance ~ losses x deflection x load). Variants: the surface kind per response
 (linear, reduced, ridge, subspace), the region rule (arsm, trust), the batch fill (local,
 region), and the study's way for comparison: ONE quadratic of the total |%| error
@@ -22,11 +22,11 @@ import numpy as np
 
 import jtire  # noqa: F401  (float64)
 from jtire.calibration import arsm
-from jtire.calibration.arsm_multi import calibrate_arsm
-from jtire.calibration.runlog import RunLog
-from jtire.calibration.spec import load_calibration
-from jtire.calibration.standin import StandinSimulator
-from jtire.calibration.targets import total_error
+from jtire.calibration.tire.arsm_multi import calibrate_arsm
+from jtire.calibration.tire.runlog import RunLog
+from jtire.calibration.tire.spec import load_calibration
+from jtire.calibration.tire.standin import StandinSimulator
+from jtire.calibration.tire.targets import total_error
 from jtire.resources import config_path
 
 

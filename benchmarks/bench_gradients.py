@@ -39,7 +39,7 @@ def main(argv=None):
 
     import jtire  # noqa: F401
     from jtire import batch
-    from jtire.calibration.shell import traced_jacobian
+    from jtire.calibration.tire.shell import traced_jacobian
     from jtire.config import load_run_config
     from jtire.tire import make_tire
 
@@ -96,8 +96,8 @@ def calibration_jacobian(args, mesh):
     import numpy as np
 
     import jtire  # noqa: F401
-    from jtire.calibration.shell import ShellSimulator
-    from jtire.calibration.spec import load_calibration
+    from jtire.calibration.tire.shell import ShellSimulator
+    from jtire.calibration.tire.spec import load_calibration
 
     spec = load_calibration(args.calibration, mesh)
     sim = ShellSimulator(spec, spec.tire)

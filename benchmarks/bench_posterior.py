@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 import jtire  # noqa: F401  (float64)
-from jtire.calibration.posterior_spec import load_posterior
-from jtire.calibration.sampling import run_posterior
+from jtire.calibration.posterior.spec import load_posterior
+from jtire.calibration.posterior.run import run_posterior
 from jtire.resources import config_path
 
 # Previous figures (2-core machine, the default-mesh study calibration's 45 runs, GP emulator,

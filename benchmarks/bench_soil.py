@@ -15,11 +15,11 @@ import time
 
 import numpy as np
 
-from jtire.calibration.soil import SoilSpec, simulate_sinkage, sinkage_objective, suggested_bounds
+from jtire.calibration.soil.block import SoilSpec, simulate_sinkage, sinkage_objective, suggested_bounds
 
 
 def time_layout(name: str, spec: SoilSpec, repeats: int) -> dict:
-    from jtire.calibration.soil import _layout, _solver
+    from jtire.calibration.soil.block import _layout, _solver
 
     t0 = time.perf_counter()
     run, mesh = _solver(_layout(spec))

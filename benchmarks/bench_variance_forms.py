@@ -22,11 +22,11 @@ from pathlib import Path
 import numpy as np
 
 import jtire  # noqa: F401  (float64)
-from jtire.calibration.conformal import held_out_residuals, variance_correction
-from jtire.calibration.emulator import fit_emulator, usable
-from jtire.calibration.posterior_report import coverage
-from jtire.calibration.posterior_spec import load_posterior
-from jtire.calibration.sampling import refined_dir, training_data
+from jtire.calibration.posterior.conformal import held_out_residuals, variance_correction
+from jtire.calibration.posterior.emulator import fit_emulator, usable
+from jtire.calibration.posterior.report import coverage
+from jtire.calibration.posterior.spec import load_posterior
+from jtire.calibration.posterior.run import refined_dir, training_data
 from jtire.resources import config_path
 
 # Previous figures (2-core machine, default-mesh study calibration, 45 runs; the check draws of a

@@ -12,28 +12,19 @@ other settings refuses.
 """
 
 import dataclasses
-import json
 from pathlib import Path
 
-import numpy as np
 
-from . import batch
-from . import units as U
+from . import batch, results
 from .config import parse_solver, read_tire_file, read_toml, validate_table
 from .errors import ConfigError
 from .fingerprint import claim_folder, code_version
-from .io import atomic_write_csv, atomic_write_text, check_writable
-from .schema import Field
+from .io import check_writable
 
 DEFAULT_EXPERIMENTS = ("footprint", "vertical_stiffness", "drum_cleat", "drop_test", "inplane_rotation", "traction",
                        "sidewall_translation", "sidewall_camber", "lateral_stiffness", "cornering", "rolling_resistance",
                        "sidewall_longitudinal")
-GRID_SCHEMA = {
-    "loads_kg": Field(list, U.G0, 50, 50000, [2312.5, 4625.0, 6937.5], "kg"),
-    "pressures_psi": Field(list, U.PSI, 10, 250, [70.0, 120.0, 150.0], "psi"),
-    "rated_load_kg": Field(float, U.G0, 50, 50000, 4625.0, "kg"),
-    "rated_pressure_psi": Field(float, U.PSI, 10, 250, 120.0, "psi"),
-}
+GRID_SCHEMA = {**results.GRID_SCHEMA, **results.RATED_SCHEMA}
 TOP_KEYS = {"description", "tire_file", "experiments", "grid", "solver"}
 
 
@@ -84,10 +75,7 @@ def load_plan(path, tire_file=None, overrides=()) -> Plan:
     exps = tuple(REGISTRY[n].from_table(validate_table(raw.get(n, {}), REGISTRY[n].schema, n), proto, tire)
                  for n in names)
     g = validate_table(raw.get("grid", {}), GRID_SCHEMA, "grid")
-    for key in ("loads_kg", "pressures_psi"):
-        if len(set(g[key])) != len(g[key]):
-            raise ConfigError(f"grid.{key}: lists a value twice")
-    conditions = tuple({"pressure_Pa": p, "load_N": w} for p in g["pressures_psi"] for w in g["loads_kg"])
+    conditions = tuple(results.grid_conditions(g, "grid"))
     for e in exps:
         if hasattr(e, "check_condition"):
             for c in conditions:
@@ -101,13 +89,6 @@ def load_plan(path, tire_file=None, overrides=()) -> Plan:
 
 def experiment_conditions(plan: Plan, exp) -> list:
     return [{"pressure_Pa": p} for p in plan.pressures] if exp.per_pressure else list(plan.conditions)
-
-
-def case_name(i: int, c: dict) -> str:
-    name = f"{i:03d}_p{c['pressure_Pa'] / U.PSI:.4g}psi"
-    if "load_N" in c:
-        name += f"_l{c['load_N'] / U.G0:.6g}kg"
-    return name
 
 
 def settings(plan: Plan) -> dict:
@@ -125,30 +106,28 @@ def run(plan: Plan, out, batch_size: int = 1, progress=None, on_case=None) -> di
     check_writable(out)
     claim_folder(out, settings(plan))
     tire = None
-    results = {}
+    found = {}
     for exp in plan.experiments:
         conds = experiment_conditions(plan, exp)
-        folder = out / exp.name / "cases"
-        names = [case_name(i, c) for i, c in enumerate(conds)]
-        todo = [i for i, n in enumerate(names) if not (folder / n / "result.json").exists()]
+        folder = results.cases_dir(out, exp.name)
+        names = [results.case_name(i, c) for i, c in enumerate(conds)]
+        todo = [i for i, n in enumerate(names) if not results.is_done(folder / n)]
         if todo:
             tire = tire or make_tire(plan.tire)
 
             def save(k, res, todo=todo, names=names, conds=conds, folder=folder):
                 i = todo[k]
                 if isinstance(res, batch.CaseFailure):
-                    atomic_write_text(folder / names[i] / "error.txt", f"{res.error}\n")
+                    results.save_failure(folder / names[i], res.error)
                     err = res.error
                 else:
-                    if footprint:  # the contact pressure over the patch (Figure 5-2), before result.json marks it done
+                    tables = {}
+                    if footprint:  # the contact pressure over the patch (Figure 5-2)
                         from .contact_pressure import footprint_table
 
                         o = res.outputs[0]
-                        atomic_write_csv(folder / names[i] / "contact_pressure.csv", None, {
-                            k: np.asarray(v) for k, v in footprint_table(tire.model, tire.params, o["y"],
-                                                                           float(o["z_road"])).items()})
-                    res.write(folder / names[i])
-                    (folder / names[i] / "error.txt").unlink(missing_ok=True)
+                        tables["contact_pressure"] = footprint_table(tire.model, tire.params, o["y"], float(o["z_road"]))
+                    results.save(folder / names[i], res, tables)
                     err = None
                 if progress is not None:
                     progress(len(exp.cases(conds[i])))
@@ -157,9 +136,9 @@ def run(plan: Plan, out, batch_size: int = 1, progress=None, on_case=None) -> di
 
             footprint = exp.name == "footprint"
             batch.run(exp, tire, [conds[i] for i in todo], batch=batch_size, on_result=save, keep_outputs=footprint)
-        results[exp.name] = [_read(folder / n / "result.json") for n in names]
-        _summary(out / exp.name, names, conds, results[exp.name], exp.per_pressure)
-    return results
+        found[exp.name] = [results.read_result(folder / n) for n in names]
+        results.write_summary(out / exp.name, names, conds, found[exp.name], exp.per_pressure)
+    return found
 
 
 def total_cases(plan: Plan, out=None) -> tuple:
@@ -169,34 +148,11 @@ def total_cases(plan: Plan, out=None) -> tuple:
         for i, c in enumerate(experiment_conditions(plan, exp)):
             n = len(exp.cases(c))
             total += n
-            if out is not None and (Path(out) / exp.name / "cases" / case_name(i, c) / "result.json").exists():
+            if out is not None and results.is_done(results.cases_dir(out, exp.name) / results.case_name(i, c)):
                 done += n
     return total, done
 
 
-def _read(path):
-    return json.loads(path.read_text()) if path.exists() else None
-
-
-def _signals(result_json_path):
-    import csv
-
-    p = Path(result_json_path).parent / "signals.csv"
-    if not p.exists():
-        return None
-    rows = list(csv.DictReader(p.open()))
-    return {k: [float(r[k]) if r[k] not in ("", "None") else float("nan") for r in rows] for k in rows[0]} if rows else None
-
-
-def _summary(folder, names, conds, results, per_pressure):
-    keys, rows = [], []
-    for n, c, r in zip(names, conds, results):
-        q = {} if r is None else {k: v for k, v in r["quantities"].items() if isinstance(v, (int, float)) or v is None}
-        keys += [k for k in q if k not in keys]
-        rows.append((n, c, q))
-    cols = ["case", "pressure_Pa"] + ([] if per_pressure else ["load_N"])
-    atomic_write_csv(Path(folder) / "summary.csv", cols + keys,
-                     [[n] + [c[k] for k in cols[1:]] + [q.get(k) for k in keys] for n, c, q in rows])
 
 
 def tire_info(plan: Plan):
@@ -220,7 +176,7 @@ def tire_info(plan: Plan):
                     rated_pressure_Pa=plan.rated["pressure_Pa"])
 
 
-def characterization(plan: Plan, out, results: dict):
+def characterization(plan: Plan, out, found: dict):
     """The rigid-ring Characterization of the finished (or partial) run: one row per grid condition,
     quantities merged from every experiment at that condition (per-pressure ones by pressure), E11's
     sigma = k_f / k_l, and E10's curves."""
@@ -231,7 +187,7 @@ def characterization(plan: Plan, out, results: dict):
     rows = []
     for c in plan.conditions:
         parts, e10 = [], None
-        for name, res_list in results.items():
+        for name, res_list in found.items():
             conds = experiment_conditions(plan, by_name[name])
             for i, (cc, r) in enumerate(zip(conds, res_list)):
                 if r is None or abs(cc["pressure_Pa"] - c["pressure_Pa"]) > 1e-6:
@@ -240,7 +196,8 @@ def characterization(plan: Plan, out, results: dict):
                     continue
                 parts.append(r)
                 if name == "cornering":
-                    e10 = _signals(out / name / "cases" / case_name(i, cc) / "result.json")
+                    s = results.read_signals(results.cases_dir(out, name) / results.case_name(i, cc))
+                    e10 = None if s is None else {k: v.tolist() for k, v in s.items()}
         q = {}
         for r in parts:
             q |= r["quantities"]

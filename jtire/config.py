@@ -29,6 +29,8 @@ def mpa(lo, hi, default=None):
     return Field(float, U.MPA, lo, hi, default, "MPa")
 
 
+MID_SURFACES = ("section_width", "carcass")
+
 PART_SCHEMA = {
     "E_meridional_MPa": mpa(0.1, 2e5), "E_circumferential_MPa": mpa(0.1, 2e5), "G_shear_MPa": mpa(0.01, 2e4),
     "E_bending_MPa": mpa(0.1, 2e5), "thickness_mm": mm(0.5, 100), "loss": Field(float, 1, 0, 2, None, "(loss tangent)"),
@@ -40,6 +42,11 @@ TIRE_SCHEMA = {
         "flange_height_mm": mm(0, 100), "section_width_mm": mm(50, 1000), "section_height_mm": mm(30, 800),
         "outer_diameter_mm": mm(300, 4000), "tread_depth_mm": mm(1, 100), "tread_width_mm": mm(20, 1000),
         "belt_width_mm": mm(20, 1000), "crown_radius_mm": mm(50, 1e5),
+        # height of the section's widest point above the rim, as a fraction of the section height
+        "widest_point_ratio": Field(float, 1, 0.2, 0.8, 0.5, "(of the section height)"),
+        # where the sidewall mid-surface is widest: at section_width / 2 ("section_width", the first
+        # mesh's choice) or half the mid-sidewall's thickness inside it ("carcass")
+        "mid_surface": Field(str, default="section_width", choices=MID_SURFACES),
     },
     "mass": {
         "tire_kg": Field(float, 1, 1, 1e4, unit="kg"), "belt_kg": Field(float, 1, 0.1, 1e4, unit="kg"),
@@ -145,16 +152,17 @@ def _check_geometry(g: Geometry) -> None:
     """Cross-field checks of the section: refuse what `jtire.mesh.section_profile` cannot build,
     or would build as something else than the file says, each as one line naming the field and
     its allowed range (mm, from the other fields). The mesh's rules: the sidewall leaves the rim at
-    rim_radius + flange_height and is widest at mid-height; the crown is an arc of transverse radius
+    rim_radius + flange_height and is widest at widest_point_ratio of its height; the crown is an arc of transverse radius
     crown_radius across the belt (a parabola r = r_belt - y^2 / (2 R)); the tread sits on the part of
     the section above 3/4 of its height, over tread_width (tapering to zero over 30 mm)."""
     mm_ = 1e3
     if abs(g.outer_radius - g.rim_radius - g.section_height) > 0.02:
         raise ConfigError(f"tire.section_height_mm = {g.section_height * mm_:g}: must equal (outer_diameter_mm - "
                           f"rim_diameter_mm) / 2 = {(g.outer_radius - g.rim_radius) * mm_:g} within 20 mm")
-    if not g.flange_height < 0.5 * g.section_height:
-        raise ConfigError(f"tire.flange_height_mm = {g.flange_height * mm_:g}: must be below half the section height, "
-                          f"{0.5 * g.section_height * mm_:g} mm (the sidewall is widest at mid-height)")
+    if not g.flange_height < g.widest_point_ratio * g.section_height:
+        raise ConfigError(f"tire.flange_height_mm = {g.flange_height * mm_:g}: must be below the widest point, "
+                          f"{g.widest_point_ratio * g.section_height * mm_:g} mm above the rim (widest_point_ratio "
+                          f"{g.widest_point_ratio:g} of the section height)")
     if not g.rim_width < g.section_width:
         raise ConfigError(f"tire.rim_width_mm = {g.rim_width * mm_:g}: must be below tire.section_width_mm = "
                           f"{g.section_width * mm_:g}")
@@ -179,6 +187,15 @@ def _check_geometry(g: Geometry) -> None:
                           f"this belt (half-width {hb * mm_:g} mm) and tread depth: a crown arc across the belt needs "
                           "a radius above its half-width, and must not drop the belt edge below the tread zone "
                           f"(room {(room - g.tread_depth) * mm_:.3g} mm)")
+    # the shoulder rises from the widest point to the belt edge
+    r_edge = g.outer_radius - g.tread_depth - hb**2 / (2.0 * g.crown_radius)
+    hi = (r_edge - g.rim_radius) / g.section_height
+    if not g.widest_point_ratio < hi:
+        raise ConfigError(f"tire.widest_point_ratio = {g.widest_point_ratio:g}: must be below {hi:.4g} (the widest "
+                          "point must lie below the belt edge)")
+    if not g.belt_width / 2 < g.section_width / 2 - g.carcass_inset:
+        raise ConfigError(f"tire.mid_surface = \"carcass\": the carcass ({g.carcass_inset * mm_:g} mm inside the section "
+                          "width) must stay outside the belt edge")
 
 
 def tire_from_dict(raw: dict) -> TireSpec:
@@ -189,6 +206,8 @@ def tire_from_dict(raw: dict) -> TireSpec:
         section_width=t["section_width_mm"], section_height=t["section_height_mm"],
         outer_radius=t["outer_diameter_mm"] / 2, tread_depth=t["tread_depth_mm"], tread_width=t["tread_width_mm"],
         belt_width=t["belt_width_mm"], crown_radius=t["crown_radius_mm"],
+        widest_point_ratio=t["widest_point_ratio"],
+        carcass_inset=0.5 * v["parts"]["mid_sidewall"]["thickness_mm"] if t["mid_surface"] == "carcass" else 0.0,
     )
     _check_geometry(geometry)
     m = v["mass"]

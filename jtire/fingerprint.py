@@ -7,6 +7,7 @@ one set of settings is never mixed with another's.
 """
 
 import dataclasses
+import functools
 import json
 from pathlib import Path
 
@@ -34,13 +35,30 @@ def plain(x):
     return x
 
 
+@functools.cache
 def code_version() -> str:
+    """The installed jtire's version and a hash of its Python sources ("0.1.0+1a2b3c4d5e6f"): two builds
+    with any source file apart give two versions, so a folder made by one is not resumed by the other.
+    The same sources give the same hash installed as a wheel or in place (files keyed by module path)."""
+    import hashlib
+    import importlib.util
     from importlib.metadata import PackageNotFoundError, version
 
     try:
-        return version("jtire")
+        v = version("jtire")
     except PackageNotFoundError:
-        return "unknown"
+        v = "unknown"
+    files = {}
+    for pkg in ("jtire", "jtire.calibration", "jtire.surrogates"):
+        spec = importlib.util.find_spec(pkg)
+        for root in (spec.submodule_search_locations or []) if spec else []:
+            for f in Path(root).rglob("*.py"):
+                if "__pycache__" not in f.parts:
+                    files[pkg.replace(".", "/") + "/" + f.relative_to(root).as_posix()] = f
+    h = hashlib.sha256()
+    for key in sorted(files):
+        h.update(key.encode() + b"\0" + files[key].read_bytes() + b"\0")
+    return f"{v}+{h.hexdigest()[:12]}"
 
 
 def _diff(a, b, prefix=""):

@@ -36,6 +36,8 @@ class Geometry:
     tread_width: float  # width of the full-depth tread
     belt_width: float  # width of the crown (belt) part
     crown_radius: float  # transverse radius of the crown (flatness of the wide-base crown)
+    widest_point_ratio: float = 0.5  # height of the widest point above the rim / section height
+    carcass_inset: float = 0.0  # the sidewall mid-surface's widest point lies this far inside section_width / 2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,7 +58,9 @@ def section_profile(g: Geometry, n_side: int, n_crown: int):
     (distance from the axle). Each sidewall (bead to belt edge) has `n_side` equal-arc elements
     and the crown `n_crown`. The right half is a crown arc, an elliptic shoulder and an elliptic
     lower sidewall (a wide-base truck section: flat crown of large transverse radius, widest point
-    at mid-height, vertical tangent at the flange); the left half mirrors it exactly.
+    at `widest_point_ratio` of the section height, vertical tangent at the flange); the left half
+    mirrors it exactly. The widest point is at section_width / 2 - carcass_inset (0: the outer
+    width; half the sidewall's thickness: the carcass, where the mid-surface is).
     The sidewall is split into the five sidewall parts by arc length, bead to belt edge.
     """
     n_sw = N_PARTS - 1
@@ -67,8 +71,8 @@ def section_profile(g: Geometry, n_side: int, n_crown: int):
     r_belt = g.outer_radius - g.tread_depth
     r_bead = g.rim_radius + g.flange_height
     hb = g.belt_width / 2
-    half_w = g.section_width / 2
-    r_mw = g.rim_radius + 0.5 * g.section_height  # widest point of the section
+    half_w = g.section_width / 2 - g.carcass_inset
+    r_mw = g.rim_radius + g.widest_point_ratio * g.section_height  # widest point of the section
     if not (g.rim_width / 2 < hb < half_w and r_bead < r_mw < r_belt):
         raise ValueError("tire geometry: need rim_width < belt_width < section_width and a "
                          "section height that puts the widest point between bead and belt")

@@ -38,6 +38,8 @@ def make_tire(spec: TireSpec) -> Tire:
     traces a few functions), so repeated runs and sweeps reuse one model and one compilation."""
     key = (spec.geometry, spec.masses, spec.n_theta, spec.n_side, spec.n_crown, spec.contact_subpoints)
     if key not in _CACHE:
+        if len(_CACHE) >= 16:  # a calibration with free geometry builds one model per point
+            _CACHE.pop(next(iter(_CACHE)))
         mesh = build_mesh(spec.geometry, spec.masses, spec.n_theta, spec.n_side, spec.n_crown)
         _CACHE[key] = (mesh, TireModel.from_mesh(mesh, spec.contact_subpoints))
     mesh, model = _CACHE[key]

@@ -12,13 +12,11 @@ no silent gap: its rows say "SHELL RUN FAILED" and the error is returned. Ring s
 against its tolerance (stated up front there).
 """
 
-import csv
-import json
 from pathlib import Path
 
 import numpy as np
 
-from . import spectra
+from . import results, spectra
 from . import units as U
 
 DEFAULT_CONDITIONS = ((4625.0, 120.0), (2312.5, 120.0), (4625.0, 70.0))  # (kg, psi): rated, light, soft
@@ -35,19 +33,11 @@ def belt_band(t) -> tuple | None:
 
 def _case_dir(char_dir, experiment, load_N, pressure_Pa):
     """The case folder of an experiment at a condition in a characterization folder (or None)."""
-    for d in sorted((Path(char_dir) / experiment / "cases").glob("*")):
-        f = d / "result.json"
-        if not f.exists():
-            continue
-        c = json.loads(f.read_text())["condition"]
-        if abs(c["pressure_Pa"] - pressure_Pa) < 1e-3 and ("load_N" not in c or abs(c["load_N"] - load_N) < 1e-6):
-            return d
-    return None
+    return results.find_case(results.cases_dir(char_dir, experiment), load_N, pressure_Pa)
 
 
 def _signals(folder):
-    rows = list(csv.DictReader((Path(folder) / "signals.csv").open()))
-    return {k: np.array([float(r[k]) if r[k] not in ("", "None") else np.nan for r in rows]) for k in rows[0]}
+    return results.read_signals(folder) or {}
 
 
 def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
@@ -55,7 +45,7 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
     m, sig = {}, {}
     d = _case_dir(char_dir, "drop_test", load_N, pressure_Pa)
     if d is not None:
-        r = json.loads((d / "result.json").read_text())
+        r = results.read_result(d)
         q, chk = r["quantities"], r["checks"]
         s = _signals(d)
         t, fz = s["time_s"], s["contact_force_z_N"]
@@ -73,7 +63,7 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
         sig["drop"] = (t - float(chk["first_contact_t_s"]), s["rim_z_m"] - rest)
     d = _case_dir(char_dir, "drum_cleat", load_N, pressure_Pa)
     if d is not None:
-        r = json.loads((d / "result.json").read_text())
+        r = results.read_result(d)
         q, info = r["quantities"], r["info"]
         s = _signals(d)
         t = s["time_s"]
@@ -87,7 +77,7 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
         sig["drum"] = (t, s["axle_force_N"])
     d = _case_dir(char_dir, "lateral_stiffness", load_N, pressure_Pa)
     if d is not None:
-        q = json.loads((d / "result.json").read_text())["quantities"]
+        q = results.read_result(d)["quantities"]
         if "f_d_fit_Hz" in q:
             s = _signals(d)
             m |= {"lateral.f_Hz": q["f_d_fit_Hz"], "lateral.zeta": q["xi_fit"]}
@@ -125,12 +115,11 @@ def slip_steps(char_dir, plan, conds, slip_step_table=None, batch_size=1, on_cas
     on_case(name or None, n_done, n_total): at the start (None) and as each condition is saved (the
     CLI draws a progress bar with it)."""
     from . import batch
-    from .characterize import case_name
     from .config import validate_table
     from .experiments import REGISTRY
     from .experiments.phases import Protocol
     from .fingerprint import claim_folder, code_version
-    from .io import atomic_write_text, check_writable
+    from .io import check_writable
     from .tire import make_tire
 
     exp = REGISTRY["slip_step"].from_table(validate_table(slip_step_table or {}, REGISTRY["slip_step"].schema,
@@ -138,37 +127,35 @@ def slip_steps(char_dir, plan, conds, slip_step_table=None, batch_size=1, on_cas
     folder = check_writable(Path(char_dir) / "validation")
     claim_folder(folder, {"slip_step": exp, "tire": plan.tire, "solver": plan.solver, "conditions": conds,
                           "jtire": code_version()})
-    names = [case_name(i, c) for i, c in enumerate(conds)]
-    todo = [i for i, n in enumerate(names) if not (folder / "cases" / n / "result.json").exists()]
+    names = [results.case_name(i, c) for i, c in enumerate(conds)]
+    cases = results.cases_dir(folder)
+    todo = [i for i, n in enumerate(names) if not results.is_done(cases / n)]
     done = [len(conds) - len(todo)]
     if on_case is not None:
         on_case(None, done[0], len(conds))
 
     def save(k, res):
-        case = folder / "cases" / names[todo[k]]
         if isinstance(res, batch.CaseFailure):
-            atomic_write_text(case / "error.txt", f"{res.error}\n")
+            results.save_failure(cases / names[todo[k]], res.error)
         else:
-            res.write(case)
-            (case / "error.txt").unlink(missing_ok=True)
+            results.save(cases / names[todo[k]], res)
         done[0] += 1
         if on_case is not None:
             on_case(names[todo[k]], done[0], len(conds))
 
     if todo:
         batch.run(exp, make_tire(plan.tire), [conds[i] for i in todo], batch=batch_size, on_result=save)
-    return [_read_case(folder / "cases" / n) for n in names]
+    return [_read_case(cases / n) for n in names]
 
 
 def _read_case(folder):
     from .experiments.result import ExperimentResult
 
-    if (folder / "result.json").exists():
-        d = json.loads((folder / "result.json").read_text())
+    d = results.read_result(folder)
+    if d is not None:
         return ExperimentResult(d["experiment"], d["condition"], d["quantities"], signals=_signals(folder),
                                 checks=d["checks"], info=d["info"])
-    err = folder / "error.txt"
-    return err.read_text().strip() if err.exists() else "not run"
+    return results.read_error(folder) or "not run"
 
 
 def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None, on_case=None):

@@ -14,11 +14,11 @@ shipped experiment config, `jtire.batch.run` over the conditions) and can write 
 
 import csv
 import dataclasses
-import json
 from pathlib import Path
 
 import numpy as np
 
+from jtire import results
 from jtire import units as U
 from jtire.errors import ConfigError, SimulationError
 
@@ -88,8 +88,8 @@ def read_columns(path) -> dict:
 
 
 def _experiment_of(case_dir: Path):
-    f = case_dir / "result.json"
-    return json.loads(f.read_text()).get("experiment") if f.is_file() else None
+    d = results.read_result(case_dir)
+    return None if d is None else d.get("experiment")
 
 
 def experiment_dir(root, experiment: str) -> Path:
@@ -97,27 +97,27 @@ def experiment_dir(root, experiment: str) -> Path:
     root = Path(root)
     if not root.is_dir():
         raise ConfigError(f"--from {root}: no such folder")
-    if (root / experiment / "cases").is_dir():
+    if results.cases_dir(root, experiment).is_dir():
         return root / experiment
-    if (root / "cases").is_dir() and any(_experiment_of(d) == experiment for d in (root / "cases").iterdir()):
+    if results.cases_dir(root).is_dir() and any(_experiment_of(d) == experiment for d in results.cases_dir(root).iterdir()):
         return root
-    have = sorted(d.name for d in root.iterdir() if (d / "cases").is_dir())
-    raise ConfigError(f"--from {root}: no results of {experiment} (expected {root / experiment / 'cases'}"
+    have = sorted(d.name for d in root.iterdir() if results.cases_dir(d).is_dir())
+    raise ConfigError(f"--from {root}: no results of {experiment} (expected {results.cases_dir(root, experiment)}"
                       + (f"; found {', '.join(have)}" if have else "") + ")")
 
 
 def load_case(folder: Path) -> Case:
-    d = json.loads((folder / "result.json").read_text())
-    tables = {p.stem: read_columns(p) for p in sorted(folder.glob("*.csv")) if p.name != "signals.csv"}
-    sig = read_columns(folder / "signals.csv") if (folder / "signals.csv").is_file() else {}
+    d = results.read_result(folder)
+    tables = {p.stem: read_columns(p) for p in sorted(folder.glob("*.csv")) if p.name != results.SIGNALS}
+    sig = read_columns(folder / results.SIGNALS) if (folder / results.SIGNALS).is_file() else {}
     return Case(folder.name, d["experiment"], d["condition"], d["quantities"], d.get("checks", {}), d.get("info", {}),
                 sig, tables)
 
 
 def load_cases(root, experiment: str) -> list:
     """Every finished case of `experiment` under root (cases with only error.txt are skipped)."""
-    base = experiment_dir(root, experiment) / "cases"
-    cases = [load_case(d) for d in sorted(base.iterdir()) if (d / "result.json").is_file()]
+    base = results.cases_dir(experiment_dir(root, experiment))
+    cases = [load_case(d) for d in sorted(base.iterdir()) if results.is_done(d)]
     cases = [c for c in cases if c.experiment == experiment]
     if not cases:
         raise ConfigError(f"{base}: no finished cases of {experiment}")
@@ -190,52 +190,27 @@ def run_cases(experiment: str, conds: list, quick: bool = False, extra=(), out_r
         conds = [{"pressure_Pa": c["pressure_Pa"]} for c in conds]
     tire = make_tire(rc.tire)
     footprint = experiment == "footprint"
-    results = batch.run(exp, tire, conds, keep_outputs=footprint)
-    failed = [f"{c}: {r.error}" for c, r in zip(conds, results) if isinstance(r, batch.CaseFailure)]
+    ran = batch.run(exp, tire, conds, keep_outputs=footprint)
+    failed = [f"{c}: {r.error}" for c, r in zip(conds, ran) if isinstance(r, batch.CaseFailure)]
     if failed:
         raise SimulationError(f"{experiment}: {len(failed)} of {len(conds)} cases failed: " + "; ".join(failed))
     cases = []
-    for i, (c, r) in enumerate(zip(conds, results)):
+    for i, (c, r) in enumerate(zip(conds, ran)):
         tables = {}
         if footprint:
             from jtire.contact_pressure import footprint_table
 
             out = r.outputs[0]
             tables["contact_pressure"] = footprint_table(tire.model, tire.params, out["y"], float(out["z_road"]))
-        case = Case(_case_name(i, c), r.experiment, dict(r.condition), dict(r.quantities), dict(r.checks),
+        case = Case(results.case_name(i, c), r.experiment, dict(r.condition), dict(r.quantities), dict(r.checks),
                     dict(r.info), {k: np.asarray(v) for k, v in r.signals.items()}, tables)
         if out_root is not None:
-            _write_case(Path(out_root) / experiment / "cases" / case.name, r, tables)
+            results.save(results.cases_dir(out_root, experiment) / case.name, r, tables)
         cases.append(case)
     if out_root is not None:
-        _write_summary(Path(out_root) / experiment, cases)
+        results.write_summary(Path(out_root) / experiment, [c.name for c in cases], [c.condition for c in cases],
+                              [{"quantities": c.quantities} for c in cases], exp.per_pressure)
     return cases
-
-
-def _case_name(i: int, c: dict) -> str:
-    from jtire.cli.sweep import case_name
-
-    return case_name(i, c)
-
-
-def _write_case(folder: Path, result, tables: dict) -> None:
-    from jtire.io import atomic_write_csv
-
-    for name, cols in tables.items():  # before result.json, which marks the case done
-        atomic_write_csv(folder / f"{name}.csv", None, {k: np.asarray(v) for k, v in cols.items()})
-    result.write(folder)
-
-
-def _write_summary(folder: Path, cases: list) -> None:
-    from jtire.io import atomic_write_csv
-
-    keys = []
-    for c in cases:
-        keys += [k for k, v in c.quantities.items() if isinstance(v, (int, float)) and k not in keys]
-    cols = ["case", "pressure_Pa", "load_N"]
-    rows = [[c.name, c.condition["pressure_Pa"], c.condition.get("load_N")] + [c.quantities.get(k) for k in keys]
-            for c in cases]
-    atomic_write_csv(folder / "summary.csv", cols + keys, rows)
 
 
 def obtain(experiment: str, kind: str, args, extra=()):

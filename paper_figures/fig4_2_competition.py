@@ -22,7 +22,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-from jtire.calibration.competition import (  # noqa: E402
+from jtire.calibration.soil.competition import (  # noqa: E402
     QUICK_BUDGET,
     QUICK_SEEDS,
     CompetitionSpec,
@@ -31,7 +31,7 @@ from jtire.calibration.competition import (  # noqa: E402
     run_competition,
     soil_objective,
 )
-from jtire.calibration.competition_report import plot_progression  # noqa: E402
+from jtire.calibration.soil.report import plot_progression  # noqa: E402
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "calibration" / "soil_competition.toml"
 

@@ -57,12 +57,12 @@ def trap_simulations(monkeypatch):
         monkeypatch.setattr(compete, "soil_objective", _trap_objective)
         monkeypatch.setattr(compete, "standin_objective", _trap_objective)
     if "calibrate" in _available():
-        import jtire.calibration.tire_calibration as tc
+        import jtire.calibration.tire.run as tc
 
         monkeypatch.setattr(tc, "calibrate_arsm", _trap)
         monkeypatch.setattr(tc, "calibrate_lm", _trap)
     if "sample" in _available():
-        import jtire.calibration.sampling as sampling
+        import jtire.calibration.posterior.run as sampling
 
         monkeypatch.setattr(sampling, "fit_emulator", _trap)
         monkeypatch.setattr(sampling, "run_sampler", _trap)

@@ -10,13 +10,22 @@ from .bad_input_harness import (
     _compete_foreign_history, _data_dir, _exact_track, _out, _track_sub, _w)
 
 def _biased(tmp, bounds, targets='["FX1", "FX2"]'):
-    """study.toml beside the shipped tire, its bias entry (free[20]) renamed bias.drag with these bounds
+    """study.toml beside the shipped tire, its bias entry (free[24]) renamed bias.drag with these bounds
     and targets."""
     text = Path(STUDY).read_text().replace('tire_file = "../tires/xone_xda.toml"',
                                            f'tire_file = "{Path(STUDY).parent.parent / "tires" / "xone_xda.toml"}"')
     old = 'name = "bias.non_tire_drag"\nbounds = [0.0, 3000.0]\ntargets = ["FX1", "FX2"]\n'
     assert old in text
     return _w(tmp, "biased.toml", text.replace(old, f'name = "bias.drag"\n{bounds}\ntargets = {targets}\n'))
+
+
+def _geometry(tmp, bounds):
+    """study.toml beside the shipped tire with the transverse crown radius (free[23]) free within these bounds."""
+    text = Path(STUDY).read_text().replace('tire_file = "../tires/xone_xda.toml"',
+                                           f'tire_file = "{Path(STUDY).parent.parent / "tires" / "xone_xda.toml"}"')
+    old = 'name = "geometry.crown_radius"\nbounds = [1000.0, 8000.0]\n'
+    assert old in text
+    return _w(tmp, "geometry.toml", text.replace(old, f'name = "geometry.crown_radius"\n{bounds}\n'))
 
 
 CASES = [
@@ -120,16 +129,31 @@ CASES = [
     Case("calibrate-tire-error-names-file", lambda t: ["calibrate", STUDY, "--standin", "--set",
                                                        "tire.tire.crown_radius_mm=50", *_out(t)],
          "tire file xone_xda.toml: tire.tire.crown_radius_mm = 50"),
-    # the rolling-resistance bias (calibration.space bias.*): non-negative, on named targets of one unit
+    # the rolling-resistance bias (calibration.tire.space bias.*): non-negative, on named targets of one unit
     Case("calibrate-bias-negative", lambda t: ["calibrate", _biased(t, "bounds = [-5.0, 3000.0]"), "--standin",
-                                               *_out(t)], "free[20].bounds = [-5.0, 3000.0] (bias.drag)", "0 <= lo < hi"),
+                                               *_out(t)], "free[24].bounds = [-5.0, 3000.0] (bias.drag)", "0 <= lo < hi"),
     Case("calibrate-bias-unknown-target", lambda t: ["calibrate", _biased(t, "bounds = [0.0, 3000.0]", '["FX3"]'),
-                                                     "--standin", *_out(t)], "free[20].targets", "'FX3' is not a target"),
+                                                     "--standin", *_out(t)], "free[24].targets", "'FX3' is not a target"),
     Case("calibrate-bias-mixed-units", lambda t: ["calibrate", _biased(t, "bounds = [0.0, 3000.0]", '["DZ", "FX1"]'),
-                                                  "--standin", *_out(t)], "free[20].targets", "one unit"),
+                                                  "--standin", *_out(t)], "free[24].targets", "one unit"),
     Case("calibrate-negative-nodal-damping", lambda t: ["calibrate", STUDY, "--standin", "--set",
                                                         "tire.model_form.nodal_damping_per_s=-1", *_out(t)],
          "tire file xone_xda.toml: tire.model_form.nodal_damping_per_s = -1", "[0, 100]"),
+    # the section's geometry (issue: a crown radius below the section width; the sidewall's widest point
+    # and mid-surface): each a field of the tire file, and a free geometry range whose end is no section
+    Case("calibrate-crown-radius-below-width", lambda t: ["calibrate", STUDY, "--standin", "--set",
+                                                          "tire.tire.crown_radius_mm=400", *_out(t)],
+         "tire.tire.crown_radius_mm = 400", "must be above 523.6 mm"),
+    Case("calibrate-widest-point-out-of-range", lambda t: ["calibrate", STUDY, "--standin", "--set",
+                                                           "tire.tire.widest_point_ratio=0.9", *_out(t)],
+         "tire.tire.widest_point_ratio = 0.9", "[0.2, 0.8]"),
+    Case("calibrate-mid-surface-choice", lambda t: ["calibrate", STUDY, "--standin", "--set",
+                                                    'tire.tire.mid_surface="outer"', *_out(t)],
+         "tire.tire.mid_surface = 'outer'", "section_width, carcass"),
+    Case("calibrate-geometry-bounds-no-section", lambda t: ["calibrate", _geometry(t, "bounds = [300.0, 6000.0]"),
+                                                            "--standin", *_out(t)],
+         "free[23].bounds = [300.0, 6000.0] (geometry.crown_radius)", "at 300 the section is not valid",
+         "must be above 523.6 mm"),
     Case("calibrate-budget-zero", lambda t: ["calibrate", STUDY, "--standin", "--budget", "0", *_out(t)],
          "--budget = 0: must be >= 1"),
     Case("calibrate-unknown-key", lambda t: ["calibrate", STUDY, "--standin", "--set", "colour=1", *_out(t)],

@@ -1,4 +1,4 @@
-"""Tire calibration machinery on the closed-form STAND-IN simulator (calibration.standin, not
+"""Tire calibration machinery on the closed-form STAND-IN simulator (calibration.tire.standin, not
 physics): ARSM and Levenberg-Marquardt recover known parameters, a killed run resumes with
 nothing lost or repeated, the Jacobian matches central differences, outputs are written."""
 
@@ -8,13 +8,13 @@ import json
 import numpy as np
 import pytest
 
-from jtire.calibration.arsm_multi import calibrate_arsm
-from jtire.calibration.gradient import calibrate_lm
-from jtire.calibration.runlog import RunLog, load_records
-from jtire.calibration.space import ParamSpace
-from jtire.calibration.spec import load_calibration
-from jtire.calibration.standin import StandinSimulator
-from jtire.calibration.tire_calibration import HISTORY, run_calibration
+from jtire.calibration.tire.arsm_multi import calibrate_arsm
+from jtire.calibration.tire.gradient import calibrate_lm
+from jtire.calibration.tire.runlog import RunLog, load_records
+from jtire.calibration.tire.space import ParamSpace
+from jtire.calibration.tire.spec import load_calibration
+from jtire.calibration.tire.standin import StandinSimulator
+from jtire.calibration.tire.run import HISTORY, run_calibration
 from jtire.errors import ConfigError
 
 from .conftest import REPO
@@ -185,8 +185,8 @@ def test_a_killed_batch_keeps_its_finished_pieces(tmp_path, synthetic):
 
 def test_run_calibration_outputs_and_fingerprint(tmp_path, study):
     sim = StandinSimulator(study.space, study.base_params, study.targets)
-    res, paths = run_calibration(study, sim, tmp_path, budget=26)
-    assert res.n_evaluations == 26
+    res, paths = run_calibration(study, sim, tmp_path, budget=30)  # the initial design: d + 2 = 27
+    assert res.n_evaluations == 30
     assert {p.name for p in tmp_path.iterdir()} >= {"fingerprint.json", HISTORY, "table_4_4.csv",
                                                     "table_4_4.md", "figure_4_6.png",
                                                     "calibrated_tire.toml", "summary.json"}
@@ -202,12 +202,12 @@ def test_run_calibration_outputs_and_fingerprint(tmp_path, study):
     tire2 = load_tire(tmp_path / "calibrated_tire.toml")
     tire_idx = spec2.space.tire_indices  # the bias (FX = FX_tire + b) is not part of the tire
     assert len(tire_idx) == spec2.space.d - 1
-    np.testing.assert_allclose(spec2.space.from_params(params_from_spec(tire2))[tire_idx],
+    np.testing.assert_allclose(spec2.space.from_params(params_from_spec(tire2), tire2.geometry)[tire_idx],
                                res.theta[tire_idx], atol=1e-5)
-    # a larger budget resumes (replays 26, runs 4 more); other settings refuse
+    # a larger budget resumes (replays 30, runs 4 more); other settings refuse
     res2, _ = run_calibration(study, StandinSimulator(study.space, study.base_params, study.targets),
-                              tmp_path, budget=30)
-    assert res2.n_evaluations == 30 and load_records(tmp_path / HISTORY)[:26] == res.records
+                              tmp_path, budget=34)
+    assert res2.n_evaluations == 34 and load_records(tmp_path / HISTORY)[:30] == res.records
     other = dataclasses.replace(study, arsm={**study.arsm, "seed": 5})
     with pytest.raises(ConfigError, match=r"other settings \(differs in options\.seed\)"):
         run_calibration(other, sim, tmp_path)

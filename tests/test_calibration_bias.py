@@ -1,4 +1,4 @@
-"""The rolling-resistance measurement model FX_measured = FX_tire + b (calibration.space `bias.*`):
+"""The rolling-resistance measurement model FX_measured = FX_tire + b (calibration.tire.space `bias.*`):
 a named, non-negative, non-tire bias that the calibration fits and the posterior samples beside the
 tire's parameters, and that never enters the tire file.
 
@@ -13,11 +13,11 @@ import json
 import numpy as np
 import pytest
 
-from jtire.calibration.gradient import calibrate_lm
-from jtire.calibration.runlog import RunLog
-from jtire.calibration.space import ParamSpace
-from jtire.calibration.spec import load_calibration
-from jtire.calibration.standin import StandinSimulator
+from jtire.calibration.tire.gradient import calibrate_lm
+from jtire.calibration.tire.runlog import RunLog
+from jtire.calibration.tire.space import ParamSpace
+from jtire.calibration.tire.spec import load_calibration
+from jtire.calibration.tire.standin import StandinSimulator
 from jtire.errors import ConfigError
 
 from .conftest import REPO
@@ -77,7 +77,7 @@ def test_lm_recovers_a_known_tire_and_bias(study):
 
 
 def test_outputs_split_tire_and_bias(tmp_path, study):
-    from jtire.calibration.tire_calibration import run_calibration
+    from jtire.calibration.tire.run import run_calibration
 
     spec = dataclasses.replace(study, space=ParamSpace.from_config(FREE, study.base_params,
                                                                    targets=study.targets))
@@ -151,7 +151,7 @@ def test_dynamic_modulus_is_the_prony_series():
 def test_nodal_damping_is_a_linear_tire_parameter(tmp_path, study):
     """model_form.nodal_damping (the study's model form): a tire parameter searched linearly from its
     default 0 (off), written to the calibrated tire's [model_form] table and read back."""
-    from jtire.calibration.tire_toml import write_calibrated_tire
+    from jtire.calibration.tire.tire_toml import write_calibrated_tire
 
     free = FREE[:1] + [{"name": "model_form.nodal_damping", "bounds": [0.0, 3.0]}]
     sp = ParamSpace.from_config(free, study.base_params, targets=study.targets)
@@ -177,7 +177,7 @@ def test_the_emulator_learns_the_tire_and_adds_the_bias(study):
     against 0.114): asserted below 0.75 of it. The split is exact: ln(tire + b) of the tire's model."""
     import types
 
-    from jtire.calibration.emulator import fit_emulator
+    from jtire.calibration.posterior.emulator import fit_emulator
 
     sp = study.space
     sim = StandinSimulator(sp, study.base_params, study.targets)
@@ -200,7 +200,7 @@ def test_the_emulator_learns_the_tire_and_adds_the_bias(study):
 def test_sensitivities_of_a_linear_parameter_are_elasticities_too(study):
     """theta of a bias is b itself, so the sensitivity table scales its column by b: d ln FX / d ln b =
     b / FX exactly (FX = FX_tire + b), like every log-space parameter's column."""
-    from jtire.calibration.sensitivity import compute
+    from jtire.calibration.tire.sensitivity import compute
 
     sim = StandinSimulator(study.space, study.base_params, study.targets)
     th = study.space.default.copy()

@@ -1,11 +1,11 @@
 """The calibration's [checks]: measured responses (the footprint) simulated once at the calibrated
-point and reported beside the targets, not fitted (calibration.tire_calibration.evaluate_checks)."""
+point and reported beside the targets, not fitted (calibration.tire.run.evaluate_checks)."""
 
 import json
 
 import pytest
 
-from jtire.calibration.spec import load_calibration
+from jtire.calibration.tire.spec import load_calibration
 from jtire.cli import main
 from jtire.errors import ConfigError
 

@@ -27,8 +27,8 @@ TOL = 1e-4
 @pytest.mark.gate
 def test_static_deflection_jacobian_matches_central_differences():
     from jtire import batch
-    from jtire.calibration.shell import ShellSimulator, traced_jacobian
-    from jtire.calibration.spec import load_calibration
+    from jtire.calibration.tire.shell import ShellSimulator, traced_jacobian
+    from jtire.calibration.tire.spec import load_calibration
 
     spec = load_calibration(REPO / "configs" / "calibration" / "study.toml", COARSE_SET)
     sim = ShellSimulator(spec, spec.tire, {"settle_damping_per_s": 300.0, "ke_tol_J": 1e-3})
@@ -69,7 +69,7 @@ def test_reverse_mode_through_rolling_matches_forward_mode_and_central_differenc
     import jax.numpy as jnp
 
     from jtire import batch
-    from jtire.calibration.shell import traced_jacobian
+    from jtire.calibration.tire.shell import traced_jacobian
     from jtire.config import load_run_config
     from jtire.experiments import Case
     from jtire.tire import make_tire

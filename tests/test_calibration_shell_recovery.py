@@ -36,16 +36,17 @@ FREE = [{"name": "parts.bead.E_bending", "factor": [0.33, 3.0], "why": "syntheti
 def make_problem(names, free, u_true):
     """study.toml's targets `names`, the `free` parameters, measured values made by the simulator at
     the unit-box point u_true: (spec, targets, simulator, RunLog)."""
-    from jtire.calibration.runlog import RunLog
-    from jtire.calibration.shell import ShellSimulator
-    from jtire.calibration.space import ParamSpace
-    from jtire.calibration.spec import load_calibration
+    from jtire.calibration.tire.runlog import RunLog
+    from jtire.calibration.tire.shell import ShellSimulator
+    from jtire.calibration.tire.space import ParamSpace
+    from jtire.calibration.tire.spec import load_calibration
 
     study = load_calibration(REPO / "configs" / "calibration" / "study.toml", COARSE_SET)
     chosen = tuple(t for t in study.targets if t.name in names)
     assert [t.name for t in chosen] == list(names)
     spec = dataclasses.replace(study, targets=chosen, weights=(1.0,) * len(chosen),
-                               space=ParamSpace.from_config(free, study.base_params))
+                               space=ParamSpace.from_config(free, study.base_params, targets=chosen,
+                                                            geometry=study.tire.geometry))
     sim = ShellSimulator(spec, spec.tire)
     y_true = sim.evaluate(spec.space.from_unit(u_true)[None])[0]
     # the simulator does not read the measured values; the run logs score against these
@@ -61,7 +62,7 @@ def problem():
 
 @pytest.mark.slow
 def test_lm_through_the_shell_model_recovers_known_parameters(problem):
-    from jtire.calibration.gradient import calibrate_lm
+    from jtire.calibration.tire.gradient import calibrate_lm
 
     spec, targets, sim, RunLog = problem
     log = RunLog(sim, targets, None, "lm", 0, 10**9, forward_budget=1e6)
@@ -73,7 +74,7 @@ def test_lm_through_the_shell_model_recovers_known_parameters(problem):
 
 @pytest.mark.slow
 def test_arsm_through_the_shell_model_recovers_known_parameters(problem):
-    from jtire.calibration.arsm_multi import calibrate_arsm
+    from jtire.calibration.tire.arsm_multi import calibrate_arsm
 
     spec, targets, sim, RunLog = problem
     res = calibrate_arsm(sim, targets, RunLog(sim, targets, None, "arsm", 0, 20), seed=0, batch_size=4)
@@ -101,7 +102,7 @@ def problem_with_rolling():
 @pytest.mark.slow
 @pytest.mark.gate
 def test_lm_recovers_known_parameters_with_the_rolling_resistance(problem_with_rolling):
-    from jtire.calibration.gradient import calibrate_lm
+    from jtire.calibration.tire.gradient import calibrate_lm
 
     spec, targets, sim, RunLog = problem_with_rolling
     log = RunLog(sim, targets, None, "lm", 0, 10**9, forward_budget=1e6)

@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 
 import jtire  # noqa: F401  (float64)
-from jtire.calibration.competition import (
+from jtire.calibration.soil.competition import (
     CompetitionSpec,
     fingerprint,
     load_config,
     run_competition,
     standin_objective,
 )
-from jtire.calibration.competition_report import calls_to_reach, format_table, summarize, write_outputs
+from jtire.calibration.soil.report import calls_to_reach, format_table, summarize, write_outputs
 from jtire.calibration.history import OptimizeResult
 from jtire.errors import ConfigError
 
@@ -147,7 +147,7 @@ def test_arsm_meets_the_issue_goal_on_the_fe_soil_model(cfg, tmp_path):
     """The goal of the competition: over 20 seeds on the FE soil block (not the stand-in), the
     median ARSM run reaches 0.18 % sinkage error in at most 24 calls (the study's single run).
     Measured: 21.5 calls (quartiles 18, 24.8), every seed reaching it; ~35 s for 1000 calls."""
-    from jtire.calibration.competition import soil_objective
+    from jtire.calibration.soil.competition import soil_objective
 
     spec = _spec(cfg, methods=["arsm"])
     assert spec.seeds == 20 and spec.budget == 50

@@ -1,12 +1,12 @@
-"""The check's variance correction (calibration.conformal) and what its coverage can tell: the
+"""The check's variance correction (calibration.posterior.conformal) and what its coverage can tell: the
 k-fold correction restores the stated coverage, the floor and the factor behave as designed, split
 conformal keeps its guarantee with 32 runs, band_chance and the exact coverage interval match the
 procedure and the closed forms."""
 
 import numpy as np
 
-from jtire.calibration.emulator import fit_emulator
-from jtire.calibration.space import ParamSpace
+from jtire.calibration.posterior.emulator import fit_emulator
+from jtire.calibration.tire.space import ParamSpace
 
 D = 3
 
@@ -25,8 +25,8 @@ def test_variance_calibration_gives_the_stated_coverage():
     ~3 %, the 2000 fresh draws a binomial 0.7 %: ~2.5 sd)."""
     from types import SimpleNamespace
 
-    from jtire.calibration.posterior_report import coverage
-    from jtire.calibration.conformal import calibrate_variance
+    from jtire.calibration.posterior.report import coverage
+    from jtire.calibration.posterior.conformal import calibrate_variance
 
     rng = np.random.default_rng(3)
     space = _space(1.0)
@@ -64,7 +64,7 @@ def test_conformal_floor_holds_where_the_emulator_variance_shrinks():
     below 0.80. The replication means have sd ~0.002."""
     from scipy import stats
 
-    from jtire.calibration.conformal import conformal_floor, conformal_scale
+    from jtire.calibration.posterior.conformal import conformal_floor, conformal_scale
 
     rng = np.random.default_rng(5)
     zq = stats.norm.ppf(0.95)
@@ -109,7 +109,7 @@ def test_conformal_scale_keeps_its_coverage_with_few_runs():
     (binomial-mixture sd ~0.002; tolerance 2.5 sd), and it is the 30th smallest |z|."""
     from scipy import stats
 
-    from jtire.calibration.conformal import conformal_scale
+    from jtire.calibration.posterior.conformal import conformal_scale
 
     rng = np.random.default_rng(11)
     zq = stats.norm.ppf(0.95)
@@ -133,7 +133,7 @@ def test_band_chance_is_what_split_conformal_gives():
     0.792 against 0.807: outside that tolerance."""
     from scipy import stats
 
-    from jtire.calibration.conformal import COVERAGE_OK, band_chance, conformal_scale
+    from jtire.calibration.posterior.conformal import COVERAGE_OK, band_chance, conformal_scale
 
     rng = np.random.default_rng(12)
     zq = stats.norm.ppf(0.95)
@@ -156,7 +156,7 @@ def test_band_chance_is_what_split_conformal_gives():
 def test_coverage_interval_is_the_exact_binomial_one():
     """Clopper-Pearson closed forms: all n inside -> lower bound 0.05^(1/n); none -> upper
     1 - 0.05^(1/n); the interval holds k/n."""
-    from jtire.calibration.posterior_report import coverage_interval
+    from jtire.calibration.posterior.report import coverage_interval
 
     assert np.allclose(coverage_interval(32, 32), [0.05 ** (1 / 32), 1.0])
     assert np.allclose(coverage_interval(0, 32), [0.0, 1 - 0.05 ** (1 / 32)])

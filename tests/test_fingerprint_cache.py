@@ -2,6 +2,8 @@
 persistent compilation cache lives (jtire.cache). No simulation."""
 
 import json
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -109,3 +111,29 @@ def test_programs_are_dropped_when_the_maps_near_the_cap():
     # four 40-kernel programs hold several hundred maps; the clear frees nearly all of them
     assert int(n0) - int(n1) > 300, (n0, n1)
     assert clears == "1" and same == "True"
+
+
+def test_code_version_hashes_the_sources(tmp_path, monkeypatch):
+    """code_version is the package version plus a hash of every source file: editing one file (here a
+    copy of the package on the import path with one comment added) gives another version."""
+    import re
+    import shutil
+    import subprocess
+    import sys
+
+    from jtire.fingerprint import code_version
+
+    v = code_version()
+    assert re.fullmatch(r"\S+\+[0-9a-f]{12}", v), v
+    import jtire
+
+    src = Path(jtire.__file__).parent
+    copy = tmp_path / "jtire"
+    shutil.copytree(src, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    cmd = "from jtire.fingerprint import code_version; import jtire; print(jtire.__file__, code_version())"
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    same = subprocess.run([sys.executable, "-c", cmd], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert same.stdout.split()[0].startswith(str(copy)) and same.stdout.split()[1] == v, same.stderr[-2000:]
+    (copy / "units.py").write_text((copy / "units.py").read_text() + "# an edit\n")
+    edited = subprocess.run([sys.executable, "-c", cmd], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert edited.stdout.split()[1] != v, edited.stderr[-2000:]

@@ -56,6 +56,12 @@ def test_wheel_installs_and_runs(tmp_path):
     where = _run([bin_ / "python", "-c", "import jtire, sys; print(jtire.__file__)"], cwd=work, env=env).stdout
     assert Path(where.strip()).is_relative_to(venv)
     assert "--set KEY=VALUE" in _run([jtire, "run", "--help"], cwd=work, env=env).stdout
+    # the same sources give the same code version installed as a wheel as in place (run folders made by
+    # one are resumed by the other; a build with any source apart is refused)
+    from jtire.fingerprint import code_version
+
+    cmd = "from jtire.fingerprint import code_version; print(code_version())"
+    assert _run([bin_ / "python", "-c", cmd], cwd=work, env=env).stdout.strip() == code_version()
     # one short run: the shipped default config (E01, E02, E09 at rated) on the coarse ring
     sets = [a for s in COARSE_SET + SOLVER_SET for a in ("--set", s)]
     p = _run([jtire, "run", *sets, "--out", "out"], cwd=work, env=env, timeout=1800)

@@ -5,7 +5,7 @@ import pytest
 
 import jtire  # noqa: F401  (float64)
 from jtire.calibration import arsm
-from jtire.calibration.baselines import genetic_algorithm, latin_hypercube_search, monte_carlo
+from jtire.calibration.soil.baselines import genetic_algorithm, latin_hypercube_search, monte_carlo
 from jtire.calibration.history import best_so_far, load_history
 from jtire.errors import ConfigError, SimulationError
 from jtire.io import read_jsonl

@@ -5,10 +5,10 @@ leave-one-out, and the simulator check measures coverage."""
 import numpy as np
 import pytest
 
-from jtire.calibration.emulator import fit_emulator
-from jtire.calibration.posterior import LogPosterior, diagnostics, run_sampler
-from jtire.calibration.posterior_report import simulator_check
-from jtire.calibration.space import ParamSpace
+from jtire.calibration.posterior.emulator import fit_emulator
+from jtire.calibration.posterior.model import LogPosterior, diagnostics, run_sampler
+from jtire.calibration.posterior.report import simulator_check
+from jtire.calibration.tire.space import ParamSpace
 
 D, M = 3, 4
 RNG = np.random.default_rng(7)
@@ -170,7 +170,7 @@ def test_unbounded_coordinates_keep_the_posterior():
     mean to 0.03 width (> 10 standard errors of 0.003), variance width^2/12 to 10 %."""
     import emcee
 
-    from jtire.calibration.posterior import UnboundedPosterior
+    from jtire.calibration.posterior.model import UnboundedPosterior
 
     space = _space(1.0)
 
@@ -194,7 +194,7 @@ def test_unbounded_coordinates_keep_the_posterior():
 def test_de_moves_in_logit_coordinates_recover_the_linear_gaussian(tmp_path):
     """The jtire sample default (DE moves, logit coordinates) on the known posterior of the first
     test, with bounds at +-4 prior sd (truncation changes the moments by < 0.1 %)."""
-    from jtire.calibration.posterior import UnboundedPosterior
+    from jtire.calibration.posterior.model import UnboundedPosterior
 
     s = np.array([0.3, 0.5, 0.4, 0.6])
     lt = A @ np.array([0.4, -0.3, 0.2]) + B
@@ -234,7 +234,7 @@ def test_killed_de_chain_resumes_to_the_same_state(tmp_path):
 def test_discrepancy_is_the_smallest_miss():
     from types import SimpleNamespace
 
-    from jtire.calibration.sampling import discrepancy_sd
+    from jtire.calibration.posterior.run import discrepancy_sd
 
     targets = [SimpleNamespace(measured=2.0), SimpleNamespace(measured=10.0)]
     y = np.array([[2.2, 5.0], [1.9, 4.0], [np.nan, 30.0]])
@@ -247,7 +247,7 @@ def test_killed_check_resumes_without_rerunning_its_draws(tmp_path):
     """The simulator check in pieces of points_per_call, each row appended as it returns: a check
     killed after 3 pieces (and torn mid-line) keeps those 6 draws; the rerun simulates only the
     other 4 and gives the same responses as an uninterrupted check."""
-    from jtire.calibration.sampling import simulate_draws
+    from jtire.calibration.posterior.run import simulate_draws
 
     class _Killed(Exception):
         pass

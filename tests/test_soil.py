@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jtire.calibration.soil import (
+from jtire.calibration.soil.block import (
     SoilSpec,
     bekker_sinkage,
     simulate_sinkage,
@@ -19,7 +19,7 @@ from jtire.calibration.soil import (
     _layout,
     _solver,
 )
-from jtire.calibration.soil_mesh import block_tridiagonal_solve
+from jtire.calibration.soil.mesh import block_tridiagonal_solve
 from jtire.errors import ConfigError, SimulationError
 
 REFERENCE = Path(__file__).resolve().parents[1] / "configs" / "reference_xone_xda.toml"

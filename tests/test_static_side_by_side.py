@@ -20,8 +20,8 @@ from .conftest import COARSE_SET, REPO
 @pytest.mark.slow
 @pytest.mark.skipif(len(jax.devices()) < 2, reason="needs two JAX devices (one per core: 2 cores)")
 def test_static_targets_side_by_side_equal_one_after_another():
-    from jtire.calibration.shell import ShellSimulator
-    from jtire.calibration.spec import load_calibration
+    from jtire.calibration.tire.shell import ShellSimulator
+    from jtire.calibration.tire.spec import load_calibration
 
     spec = load_calibration(REPO / "configs" / "calibration" / "study.toml", COARSE_SET)
     spec = dataclasses.replace(spec, targets=tuple(t for t in spec.targets if t.name in ("DZ", "DY")))

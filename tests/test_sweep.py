@@ -17,7 +17,8 @@ import pytest
 
 from jtire import units as U
 from jtire.cli import main
-from jtire.cli.sweep import case_name, grid_conditions
+from jtire.cli.sweep import grid_conditions
+from jtire.results import case_name
 from jtire.config import load_run_config
 from jtire.errors import ConfigError
 

@@ -1,5 +1,5 @@
 """`jtire calibrate CONFIG`: tune the tire's free parameters to the calibration targets (the work
-is `jtire.calibration.tire_calibration`).
+is `jtire.calibration.tire.run`).
 
 Outputs in --out: fingerprint.json, history.jsonl (every evaluation; rerun the same command to
 resume a killed run), table_4_4.csv/.md, figure_4_6.png, calibrated_tire.toml, summary.json.
@@ -30,10 +30,10 @@ def add_arguments(parser):
 
 
 def simulator_for(spec, standin: bool, say):
-    """The shell simulator (calibration.shell.make_simulator) or the stand-in; a missing
+    """The shell simulator (calibration.tire.shell.make_simulator) or the stand-in; a missing
     shell simulator is reported as one line (returns None)."""
-    from ..calibration.shell import make_simulator
-    from ..calibration.standin import StandinSimulator
+    from ..calibration.tire.shell import make_simulator
+    from ..calibration.tire.standin import StandinSimulator
 
     if standin:
         say("simulator: closed-form STAND-IN (not physics)")
@@ -70,8 +70,8 @@ def _case_bar(unit=None):
 
 
 def run_cli(args, say) -> int:
-    from ..calibration.spec import load_calibration
-    from ..calibration.tire_calibration import run_calibration
+    from ..calibration.tire.spec import load_calibration
+    from ..calibration.tire.run import run_calibration
     from ..errors import ConfigError
 
     from ..io import check_writable
@@ -111,9 +111,9 @@ def _check_tire(args, say) -> int:
 
     import numpy as np
 
-    from ..calibration.report import format_markdown, table_4_4
-    from ..calibration.spec import load_calibration
-    from ..calibration.targets import percent_errors, total_error
+    from ..calibration.tire.report import format_markdown, table_4_4
+    from ..calibration.tire.spec import load_calibration
+    from ..calibration.tire.targets import percent_errors, total_error
     from ..errors import ConfigError
     from ..io import atomic_write_json, atomic_write_text, check_writable
 
@@ -140,7 +140,7 @@ def _check_tire(args, say) -> int:
     errs = percent_errors(values, spec.targets)
     res = types.SimpleNamespace(values=values, errors_pct=errs, theta=theta,
                                 total_error_pct=float(total_error(values[None], spec.targets, spec.weights)[0]))
-    from ..calibration.tire_calibration import evaluate_checks
+    from ..calibration.tire.run import evaluate_checks
 
     rows = table_4_4(res, spec, evaluate_checks(spec, sim, theta))
     text = format_markdown(rows)

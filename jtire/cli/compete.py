@@ -1,11 +1,11 @@
 """`jtire compete`: ARSM vs GA vs Monte Carlo on the soil-block simulation (the work is
-`jtire.calibration.competition`)."""
+`jtire.calibration.soil.competition`)."""
 
 from pathlib import Path
 
-from ..calibration.competition import (QUICK_BUDGET, QUICK_SEEDS, CompetitionSpec, fingerprint, load_config,
+from ..calibration.soil.competition import (QUICK_BUDGET, QUICK_SEEDS, CompetitionSpec, fingerprint, load_config,
                                        run_competition, soil_objective, standin_objective)
-from ..calibration.competition_report import format_table, write_outputs
+from ..calibration.soil.report import format_table, write_outputs
 
 
 def add_arguments(parser):

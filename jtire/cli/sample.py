@@ -1,5 +1,5 @@
 """`jtire sample CONFIG`: the posterior of a calibration's free parameters (emcee through an
-emulator trained on the calibration's simulator runs; the work is `jtire.calibration.sampling`).
+emulator trained on the calibration's simulator runs; the work is `jtire.calibration.posterior.run`).
 
 Rerun the same command to resume a killed chain or check. --check runs posterior draws through the
 simulator (in pieces that fill the cores once, each saved as it returns: OUT/check_runs.jsonl) and
@@ -30,9 +30,9 @@ def add_arguments(parser):
 def run_cli(args, say) -> int:
     import dataclasses
 
-    from ..calibration.posterior_spec import load_posterior
-    from ..calibration.conformal import COVERAGE_OK, band_chance
-    from ..calibration.sampling import run_posterior
+    from ..calibration.posterior.spec import load_posterior
+    from ..calibration.posterior.conformal import COVERAGE_OK, band_chance
+    from ..calibration.posterior.run import run_posterior
     from .calibrate import _case_bar, simulator_for
 
     spec = load_posterior(args.config, args.set)
@@ -80,7 +80,7 @@ def run_cli(args, say) -> int:
             n_cal, n = final["n_check_runs"], final["check"]["n"]
             say(f"  (an interval made exactly valid on {n_cal} held-out runs shows a coverage inside "
                 f"{COVERAGE_OK[0]:.0%}-{COVERAGE_OK[1]:.0%} on {n} draws with chance "
-                f"{band_chance(n_cal, n):.2f} per response: calibration.conformal.band_chance)")
+                f"{band_chance(n_cal, n):.2f} per response: calibration.posterior.conformal.band_chance)")
     return 0 if final["result"].converged else 1
 
 
@@ -104,8 +104,10 @@ def _report(r, spec, say) -> None:
         f"R-hat max {np.nanmax(diag['rhat']):.4f}; bulk ESS min {np.nanmin(diag['ess_bulk']):.0f}")
     say("posterior predictive of the tire model (median [90 % interval]) beside the targets:")
     for row in r["predictive"]:
-        say(f"  {row['target']:<5} {row['what']:<22} measured {row['measured']:.5g} {row['unit']:<5}"
-            f" median {row['median']:.5g} [{row['lower']:.5g}, {row['upper']:.5g}]")
+        meas = f"measured {row['measured']:.5g} {row['unit']:<5}" if np.isfinite(row["measured"]) else \
+            f"{'(not measured)':<{len(row['unit']) + 20}}"  # the tire alone and the bias: no measurement
+        say(f"  {row['target']:<5} {row['what']:<22} {meas} median {row['median']:.5g} [{row['lower']:.5g}, "
+            f"{row['upper']:.5g}]")
     say("posterior / prior 90 % width in ln p (smallest first):")
     for row in sorted(r["widths"], key=lambda w: w["ratio"])[:8]:
         say(f"  {row['parameter']:<40} {row['ratio']:.3f}")

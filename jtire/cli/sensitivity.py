@@ -1,6 +1,6 @@
 """`jtire sensitivity CONFIG`: d(quantity)/d(ln parameter) for a calibration config's free
 parameters, at the base tire or at a calibrated point (the work is
-`jtire.calibration.sensitivity`): a table (CSV, JSON), a heat map of the elasticities and the
+`jtire.calibration.tire.sensitivity`): a table (CSV, JSON), a heat map of the elasticities and the
 singular values of the targets' Jacobian (how many parameter directions the targets identify).
 """
 
@@ -29,8 +29,8 @@ def add_arguments(parser):
 
 
 def run_cli(args, say) -> int:
-    from ..calibration.sensitivity import compute, identifiability, write_sensitivity
-    from ..calibration.spec import load_calibration
+    from ..calibration.tire.sensitivity import compute, identifiability, write_sensitivity
+    from ..calibration.tire.spec import load_calibration
     from ..errors import ConfigError
     from .calibrate import simulator_for
 

@@ -11,38 +11,17 @@ so a rerun into DIR resumes (finished cases are not recomputed) only with the sa
 refuses otherwise. DIR/summary.csv gathers every case's quantities.
 """
 
-import json
 from pathlib import Path
 
-from .. import units as U
+from .. import results
 from ..config import validate_table
 from ..errors import ConfigError, SimulationError
-from ..io import atomic_write_csv, atomic_write_text, check_writable
-from ..schema import Field
-
-GRID_SCHEMA = {
-    "loads_kg": Field(list, U.G0, 50, 50000, [2312.5, 4625.0, 6937.5], "kg"),
-    "pressures_psi": Field(list, U.PSI, 10, 250, [70.0, 120.0, 150.0], "psi"),
-}
+from ..io import check_writable
 
 
 def grid_conditions(raw_sweep: dict, per_pressure: bool = False):
-    g = validate_table(raw_sweep or {}, GRID_SCHEMA, "sweep")
-    for key in ("loads_kg", "pressures_psi"):
-        vals = g[key]
-        if len(set(vals)) != len(vals):
-            raise ConfigError(f"sweep.{key}: lists a value twice")
-    if per_pressure:
-        return [{"pressure_Pa": p} for p in g["pressures_psi"]]
-    return [{"pressure_Pa": p, "load_N": w} for p in g["pressures_psi"] for w in g["loads_kg"]]
-
-
-def case_name(i: int, c: dict) -> str:
-    """Unique (the index comes first) and readable: 003_p120psi_l4625kg."""
-    name = f"{i:03d}_p{c['pressure_Pa'] / U.PSI:.4g}psi"
-    if "load_N" in c:
-        name += f"_l{c['load_N'] / U.G0:.6g}kg"
-    return name
+    g = validate_table(raw_sweep or {}, results.GRID_SCHEMA, "sweep")
+    return results.grid_conditions(g, "sweep", per_pressure)
 
 
 def add_arguments(p):
@@ -81,8 +60,9 @@ def run_cli(args, say) -> int:
     out = Path(args.out)
     check_writable(out)
     resumed = claim_folder(out, settings(rc, exp, conditions))
-    names = [case_name(i, c) for i, c in enumerate(conditions)]
-    todo = [i for i, n in enumerate(names) if not (out / "cases" / n / "result.json").exists()]
+    names = [results.case_name(i, c) for i, c in enumerate(conditions)]
+    cases = results.cases_dir(out)
+    todo = [i for i, n in enumerate(names) if not results.is_done(cases / n)]
     if resumed:
         say(f"resuming: {len(conditions) - len(todo)} of {len(conditions)} cases already done in {out}", err=True)
     failures = []
@@ -92,32 +72,21 @@ def run_cli(args, say) -> int:
 
         def save(k, res):
             i = todo[k]
-            folder = out / "cases" / names[i]
             if isinstance(res, batch.CaseFailure):
                 failures.append(f"{names[i]}: {res.error}")
-                atomic_write_text(folder / "error.txt", f"{res.error}\n")
+                results.save_failure(cases / names[i], res.error)
             else:
-                res.write(folder)
-                (folder / "error.txt").unlink(missing_ok=True)
+                results.save(cases / names[i], res)
             bar.update(1)
 
         batch.run(exp, tire, [conditions[i] for i in todo], batch=args.batch, on_result=save)
         bar.close()
-    rows, keys = [], []
-    for i, c in enumerate(conditions):
-        f = out / "cases" / names[i] / "result.json"
-        if not f.exists():
-            continue
-        d = json.loads(f.read_text())
-        q = {k: v for k, v in d["quantities"].items() if isinstance(v, (int, float)) or v is None}
-        keys += [k for k in q if k not in keys]
-        rows.append((names[i], c, q))
-    cols = ["case", "pressure_Pa"] + (["load_N"] if not exp.per_pressure else [])
-    atomic_write_csv(out / "summary.csv", cols + keys,
-                     [[n] + [c[k] for k in cols[1:]] + [q.get(k) for k in keys] for n, c, q in rows])
-    for n, c, q in rows:
-        say(f"{n}: " + ", ".join(f"{k}={v:.6g}" for k, v in q.items() if isinstance(v, (int, float))))
-    say(f"summary written to {out / 'summary.csv'}")
+    done = [(n, c, results.read_result(cases / n)) for n, c in zip(names, conditions) if results.is_done(cases / n)]
+    results.write_summary(out, [n for n, _, _ in done], [c for _, c, _ in done], [r for _, _, r in done],
+                          exp.per_pressure)
+    for n, _, r in done:
+        say(f"{n}: " + ", ".join(f"{k}={v:.6g}" for k, v in r["quantities"].items() if isinstance(v, (int, float))))
+    say(f"summary written to {out / results.SUMMARY}")
     if failures:
         raise SimulationError(f"{len(failures)} of {len(conditions)} cases failed (rerun to retry them): "
                               + "; ".join(failures))

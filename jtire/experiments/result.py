@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io import atomic_write_csv, atomic_write_json
+from ..results import RESULT, SIGNALS
 
 
 @dataclasses.dataclass
@@ -34,6 +35,6 @@ class ExperimentResult:
             n = {len(np.atleast_1d(v)) for v in self.signals.values()}
             if len(n) != 1:
                 raise ValueError(f"signals of unequal length: { {k: len(v) for k, v in self.signals.items()} }")
-            written.append(atomic_write_csv(out / "signals.csv", None, {k: np.asarray(v) for k, v in self.signals.items()}))
-        written.append(atomic_write_json(out / "result.json", self.to_json_dict()))
+            written.append(atomic_write_csv(out / SIGNALS, None, {k: np.asarray(v) for k, v in self.signals.items()}))
+        written.append(atomic_write_json(out / RESULT, self.to_json_dict()))
         return written

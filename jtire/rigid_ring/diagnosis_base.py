@@ -2,14 +2,12 @@
 context (its table row, what `params.derive` makes of it, the comparison rows), number formatting,
 and the verdict rule every check shares (FULL / PARTIAL / NONE)."""
 
-import csv
 import dataclasses
-import json
 import math
-from pathlib import Path
 
 import numpy as np
 
+from .. import results
 from .params import derive
 
 # ------------------------------------------------------------------ the shell's case folders
@@ -20,21 +18,8 @@ def _case(char_dir, experiment, load_N, pressure_Pa):
     in a characterization folder, or (None, None)."""
     if char_dir is None:
         return None, None
-    for d in sorted((Path(char_dir) / experiment / "cases").glob("*")):
-        f = d / "result.json"
-        if not f.exists():
-            continue
-        res = json.loads(f.read_text())
-        c = res.get("condition", {})
-        if abs(c.get("pressure_Pa", -1) - pressure_Pa) < 1e-3 and ("load_N" not in c or abs(c["load_N"] - load_N) < 1e-6):
-            sig = None
-            if (d / "signals.csv").exists():
-                rows = list(csv.DictReader((d / "signals.csv").open()))
-                if rows:
-                    sig = {k: np.array([float(r[k]) if r[k] not in ("", "None") else np.nan for r in rows])
-                           for k in rows[0]}
-            return res, sig
-    return None, None
+    d = results.find_case(results.cases_dir(char_dir, experiment), load_N, pressure_Pa)
+    return (None, None) if d is None else (results.read_result(d), results.read_signals(d))
 
 
 @dataclasses.dataclass

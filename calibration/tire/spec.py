@@ -9,7 +9,7 @@ Layout (every field checked; a bad one is a ConfigError naming it, one line):
     [checks.NAME] ...                        # optional: measured responses in the same form, not
                                              # fitted: simulated once at the calibrated point and
                                              # reported beside the targets (e.g. the footprint)
-    [[free]] name = ..., factor|bounds = [lo, hi], why = "..."   # calibration.space
+    [[free]] name = ..., factor|bounds = [lo, hi], why = "..."   # calibration.tire.space
     [objective] weights = { NAME = 1.0 }     # optional; equal weights by default
     [arsm] budget, seed, batch_size, n_initial, surface, region_rule, fill, weighting,
            min_width, min_shrink, initial_width, tol_percent
@@ -24,9 +24,9 @@ import dataclasses
 import math
 from pathlib import Path
 
-from ..schema import Field as F
-from ..config import apply_overrides, load_toml, read_tire_file, validate_table
-from ..errors import ConfigError
+from ...schema import Field as F
+from ...config import apply_overrides, load_toml, read_tire_file, validate_table
+from ...errors import ConfigError
 from .arsm_multi import DEFAULT_SURFACE, FILLS, RULES, WEIGHTINGS
 from .response_surfaces import KINDS
 from .space import ParamSpace
@@ -95,7 +95,7 @@ class CalibrationSpec:
 
     def fingerprint(self, simulator=None) -> dict:
         """Everything that determines a calibration's numbers (budget excluded: it may grow)."""
-        from ..fingerprint import code_version
+        from ...fingerprint import code_version
 
         opts = {"arsm": {k: v for k, v in self.arsm.items() if k != "budget"},
                 "gradient": {k: v for k, v in self.gradient.items()
@@ -115,7 +115,7 @@ def _is_num(v):
 def load_calibration(path, overrides=(), data_dir=None, tire_path=None) -> CalibrationSpec:
     """Read and validate a calibration config (+ `--set` overrides). tire_path: a tire TOML to use
     instead of the config's tire_file (e.g. a calibrated tire to check against the targets)."""
-    from ..tire import params_from_spec
+    from ...tire import params_from_spec
 
     path = Path(path)
     raw = load_toml(path)
@@ -137,7 +137,7 @@ def load_calibration(path, overrides=(), data_dir=None, tire_path=None) -> Calib
     clash = sorted({t.name for t in targets} & {c.name for c in checks})
     if clash:
         raise ConfigError(f"checks.{clash[0]}: also a target; a response is fitted or checked, not both")
-    space = ParamSpace.from_config(raw.get("free"), base, targets=targets)
+    space = ParamSpace.from_config(raw.get("free"), base, targets=targets, geometry=tire.geometry)
     names = [t.name for t in targets]
     obj = raw.get("objective", {})
     if not isinstance(obj, dict) or any(k != "weights" for k in obj):

@@ -5,6 +5,11 @@ A free parameter is one MaterialParams leaf, per part where the leaf is per part
     parts.<part>.<field>   part in jtire.mesh.PART_NAMES, field in PER_PART_FIELDS
     undertread.E  undertread.thickness  tread.E  tread.G  tread.loss  tread.friction
 
+or a geometry parameter of the section (not traceable: the mesh is built in numpy, so a simulator
+builds one model per geometry, and its Jacobian takes these columns by finite differences):
+
+    geometry.crown_radius  geometry.widest_point_ratio
+
 or a measurement-model parameter that is not part of the tire:
 
     bias.<label>   an additive bias b >= 0 on the targets it names (`targets = [...]`): what those
@@ -18,7 +23,7 @@ span a factor of ten are searched evenly in log space, positivity is built in, a
 d(response)/d(theta) is the response's change per relative change of the parameter (an
 elasticity once divided by the response), comparable across parameters of different units.
 
-`to_params(theta, base)` (bias entries skipped) is pure jax (gathers and scatters with static indices), so a simulator
+`to_params(theta, base)` (bias and geometry entries skipped) is pure jax (gathers and scatters with static indices), so a simulator
 may jit, vmap, jvp or grad through it. The bounds are [lower, upper] of theta, shape (d,).
 """
 
@@ -29,9 +34,9 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from .. import units as U
-from ..errors import ConfigError
-from ..mesh import PART_NAMES
+from ... import units as U
+from ...errors import ConfigError
+from ...mesh import PART_NAMES
 
 __all__ = ["PER_PART_FIELDS", "SCALAR_LEAVES", "ParamSpace", "allowed_names", "leaf_of"]
 
@@ -52,6 +57,10 @@ _FILE_UNITS = {"E_meridional": ("E_meridional_MPa", U.MPA, "MPa"),
                "nodal_damping": ("nodal_damping_per_s", 1.0, "1/s")}
 
 
+# config name -> Geometry field (the section's shape: `jtire.mesh.section_profile`)
+GEOMETRY_LEAVES = {"geometry.crown_radius": "crown_radius", "geometry.widest_point_ratio": "widest_point_ratio"}
+_FILE_UNITS.update({"crown_radius": ("crown_radius_mm", U.MM, "mm"),
+                    "widest_point_ratio": ("widest_point_ratio", 1.0, "")})
 BIAS = "bias"  # the field of a bias entry (not a MaterialParams leaf)
 LINEAR_FIELDS = (BIAS, "nodal_damping")
 _SI_UNIT = {"_N": "N", "_m": "m", "_N_per_m": "N/m", "": ""}
@@ -60,7 +69,8 @@ _SI_UNIT = {"_N": "N", "_m": "m", "_N_per_m": "N/m", "": ""}
 def allowed_names() -> str:
     """One line describing every allowed parameter name (for error messages)."""
     return (f"parts.<part>.<field> with part in {{{', '.join(PART_NAMES)}}} and field in "
-            f"{{{', '.join(PER_PART_FIELDS)}}}, {', '.join(SCALAR_LEAVES)}, or bias.<label> "
+            f"{{{', '.join(PER_PART_FIELDS)}}}, {', '.join(SCALAR_LEAVES)}, {', '.join(GEOMETRY_LEAVES)}, "
+            "or bias.<label> "
             "(with targets = [...])")
 
 
@@ -68,6 +78,8 @@ def leaf_of(name: str):
     """Config name -> (MaterialParams field, part index or -1 for a scalar leaf); None if unknown."""
     if name in SCALAR_LEAVES:
         return SCALAR_LEAVES[name], -1
+    if name in GEOMETRY_LEAVES:
+        return GEOMETRY_LEAVES[name], -1
     if name.startswith("bias.") and len(name) > 5 and "." not in name[5:]:
         return BIAS, -1
     bits = name.split(".")
@@ -88,7 +100,8 @@ class ParamSpace:
     lower, upper: (d,) bounds of theta = ln(SI value) (a bias: theta = b, SI); default: (d,)
     theta of the base tire (a bias: its lower bound); reasons: (d,) the config's one-line reason
     for each parameter; bias_targets: (d,) the target names a bias entry adds to, () for a tire
-    leaf; bias_units: (d,) the SI unit of a bias entry ("" for a tire leaf).
+    leaf; bias_units: (d,) the SI unit of a bias entry ("" for a tire leaf); base_geometry: the
+    tire's `jtire.mesh.Geometry` (the value of every geometry field that is not free).
     """
 
     names: tuple
@@ -100,6 +113,7 @@ class ParamSpace:
     reasons: tuple = ()
     bias_targets: tuple = ()
     bias_units: tuple = ()
+    base_geometry: object = None
 
     @property
     def d(self) -> int:
@@ -111,6 +125,27 @@ class ParamSpace:
     def is_linear(self, i: int) -> bool:
         """theta_i is the SI value itself (a bias, the nodal damping), not its log."""
         return self.fields[i] in LINEAR_FIELDS
+
+    def is_geometry(self, i: int) -> bool:
+        return self.fields[i] in GEOMETRY_FIELDS
+
+    @property
+    def geometry_indices(self) -> list:
+        return [i for i in range(self.d) if self.is_geometry(i)]
+
+    def geometry_at(self, theta):
+        """The section's Geometry at theta (d,) (numpy): the base tire's with the free fields set."""
+        theta = np.asarray(theta, float)
+        new = {self.fields[i]: float(np.exp(theta[i])) for i in self.geometry_indices}
+        return dataclasses.replace(self.base_geometry, **new) if new else self.base_geometry
+
+    def geometry_values(self, theta) -> dict:
+        """{Geometry field: value (SI)} of every calibratable geometry field at theta (jax-traceable;
+        a field that is not free keeps the base tire's value)."""
+        out = {f: getattr(self.base_geometry, f) for f in GEOMETRY_FIELDS} if self.base_geometry else {}
+        for i in self.geometry_indices:
+            out[self.fields[i]] = jnp.exp(jnp.asarray(theta)[i])
+        return out
 
     @property
     def has_bias(self) -> bool:
@@ -177,7 +212,7 @@ class ParamSpace:
         theta = jnp.asarray(theta)
         groups = {}
         for i, (f, p) in enumerate(zip(self.fields, self.parts)):
-            if f != BIAS:
+            if f != BIAS and f not in GEOMETRY_FIELDS:
                 groups.setdefault(f, []).append((i, p))
         if not groups:
             return base
@@ -193,12 +228,16 @@ class ParamSpace:
         fields = tuple(groups)
         return eqx.tree_at(lambda m: tuple(getattr(m, f) for f in fields), base, tuple(new))
 
-    def from_params(self, params) -> np.ndarray:
-        """theta (d,) of a MaterialParams (numpy); a bias entry gets its lower bound (no bias)."""
+    def from_params(self, params, geometry=None) -> np.ndarray:
+        """theta (d,) of a MaterialParams (numpy) and a section (`geometry`, a Geometry; default: the
+        base tire's); a bias entry gets its lower bound (no bias)."""
         out = []
         for i, (f, p) in enumerate(zip(self.fields, self.parts)):
             if f == BIAS:
                 out.append(float(self.lower[i]) if len(self.lower) > i else 0.0)
+                continue
+            if f in GEOMETRY_FIELDS:  # not in MaterialParams: the section's
+                out.append(math.log(getattr(geometry or self.base_geometry, f)))
                 continue
             leaf = np.asarray(getattr(params, f), dtype=float)
             v = float(leaf) if p < 0 else float(leaf[p])
@@ -224,7 +263,8 @@ class ParamSpace:
                 continue
             v = self.value(i, theta[i])
             key, factor, unit = _FILE_UNITS[f]
-            table = f"parts.{PART_NAMES[p]}" if p >= 0 else n.rsplit(".", 1)[0]
+            table = (f"parts.{PART_NAMES[p]}" if p >= 0 else "tire" if f in GEOMETRY_FIELDS
+                     else n.rsplit(".", 1)[0])
             out.append((table, key, float(v) / factor, unit))
         return out
 
@@ -246,7 +286,7 @@ class ParamSpace:
 
     # -- construction ------------------------------------------------------------------------
     @classmethod
-    def from_config(cls, free, base, where: str = "free", targets=None) -> "ParamSpace":
+    def from_config(cls, free, base, where: str = "free", targets=None, geometry=None) -> "ParamSpace":
         """Parse the [[free]] array of tables against a base MaterialParams.
 
         Each tire entry: name = "<parameter>", and either factor = [lo, hi] (times the base tire's
@@ -254,6 +294,8 @@ class ParamSpace:
         thicknesses, none for loss tangents and friction); why = "one-line reason" (optional).
         A bias entry: name = "bias.<label>", bounds = [lo, hi] with 0 <= lo < hi in the SI unit of
         its targets, targets = [names of calibration targets] (`targets`: the parsed Targets).
+        A geometry entry (geometry.<field>) is bounded like a tire leaf; `geometry` is the tire's
+        Geometry, and both bounds must give a section the mesh can build.
         """
         if not isinstance(free, list) or not free or not all(isinstance(e, dict) for e in free):
             raise ConfigError(f"{where}: must be a non-empty array of tables [[{where}]] with "
@@ -284,8 +326,13 @@ class ParamSpace:
                 lo.append(b_lo), hi.append(b_hi), reasons.append(r)
                 btargets.append(tnames), bunits.append(unit)
                 continue
-            v0 = np.asarray(getattr(base, field), dtype=float)
-            v0 = float(v0) if part < 0 else float(v0[part])
+            if field in GEOMETRY_FIELDS:
+                if geometry is None:
+                    raise ConfigError(f"{at}.name = {name!r}: geometry parameters need the tire's section")
+                v0 = float(getattr(geometry, field))
+            else:
+                v0 = np.asarray(getattr(base, field), dtype=float)
+                v0 = float(v0) if part < 0 else float(v0[part])
             linear = field in LINEAR_FIELDS
             if linear and "factor" in e:
                 raise ConfigError(f"{at}.factor ({name}): searched linearly from a tire value that may be "
@@ -309,15 +356,32 @@ class ParamSpace:
             if not lo_si * (1 - 1e-12) <= v0 <= hi_si * (1 + 1e-12):
                 raise ConfigError(f"{at}.{key} = {b!r} ({name}): must contain the tire's value "
                                   f"{v0 / factor:g}{' ' + unit if unit else ''}")
+            if field in GEOMETRY_FIELDS:
+                _check_geometry_bounds(geometry, field, (lo_si, hi_si), f"{at}.{key} = {b!r} ({name})")
             names.append(name), fields.append(field), parts.append(part)
             lo.append(lo_si if linear else math.log(lo_si)), hi.append(hi_si if linear else math.log(hi_si))
             reasons.append(r), btargets.append(()), bunits.append("")
         if all(f == BIAS for f in fields):
             raise ConfigError(f"{where}: only bias entries; free at least one tire parameter")
         space = cls(tuple(names), tuple(fields), tuple(parts), np.array(lo), np.array(hi),
-                    np.zeros(len(names)), tuple(reasons), tuple(btargets), tuple(bunits))
+                    np.zeros(len(names)), tuple(reasons), tuple(btargets), tuple(bunits), geometry)
         default = np.clip(space.from_params(base), space.lower, space.upper)
         return dataclasses.replace(space, default=default)
+
+
+GEOMETRY_FIELDS = tuple(GEOMETRY_LEAVES.values())
+
+
+def _check_geometry_bounds(geometry, field, bounds, at):
+    """Both ends of a geometry parameter's range must give a section the mesh builds (each check
+    is monotone in one field, so the ends decide the whole range)."""
+    from ...config import _check_geometry
+
+    for v in bounds:
+        try:
+            _check_geometry(dataclasses.replace(geometry, **{field: v}))
+        except ConfigError as e:
+            raise ConfigError(f"{at}: at {v / _FILE_UNITS[field][1]:g} the section is not valid: {e}") from None
 
 
 def _parse_bias(e, at, name, targets):

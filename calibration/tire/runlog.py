@@ -28,12 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .history import BudgetExhausted
+from ..history import BudgetExhausted
 from .simulator import check_batch, pieces
 from .targets import percent_errors
-from ..errors import ConfigError
-from ..fingerprint import claim_folder
-from ..io import append_jsonl, atomic_write_json, atomic_write_text, read_jsonl
+from ...errors import ConfigError
+from ...fingerprint import claim_folder
+from ...io import append_jsonl, atomic_write_json, atomic_write_text, read_jsonl
 
 __all__ = ["RunLog", "check_fingerprint", "BudgetExhausted", "load_records", "records_arrays"]
 

@@ -57,11 +57,11 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.optimize import minimize as _scipy_minimize
 
-from .arsm import _fit_set, _sub_seed
+from ..arsm import _fit_set, _sub_seed
 from .response_surfaces import KINDS, fit_responses, terms
 from .runlog import BudgetExhausted, RunLog
-from ..errors import ConfigError
-from ..surrogates import Region, arsm_update, latin_hypercube, maximin_fill, second_best, sobol
+from ...errors import ConfigError
+from ...surrogates import Region, arsm_update, latin_hypercube, maximin_fill, second_best, sobol
 
 __all__ = ["CalibrationResult", "calibrate_arsm", "DEFAULT_SURFACE", "RULES"]
 

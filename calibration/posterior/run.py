@@ -45,13 +45,13 @@ import numpy as np
 
 from .conformal import COVERAGE_OK, calibrate_variance
 from .emulator import fit_emulator, usable
-from .posterior import LogPosterior, UnboundedPosterior, diagnostics, run_sampler
-from .posterior_report import check_draws, coverage, plot_corner, predictive, widths
-from .runlog import check_fingerprint, load_records, records_arrays
-from .tire_calibration import HISTORY
-from ..errors import ConfigError
-from .simulator import check_batch, pieces
-from ..io import append_jsonl, atomic_write_csv, atomic_write_json, atomic_write_text, read_jsonl
+from .model import LogPosterior, UnboundedPosterior, diagnostics, run_sampler
+from .report import check_draws, coverage, plot_corner, predictive, widths
+from ..tire.runlog import check_fingerprint, load_records, records_arrays
+from ..tire.run import HISTORY
+from ...errors import ConfigError
+from ..tire.simulator import check_batch, pieces
+from ...io import append_jsonl, atomic_write_csv, atomic_write_json, atomic_write_text, read_jsonl
 
 __all__ = ["run_posterior", "training_data", "start_walkers", "discrepancy_sd", "simulate_draws",
            "refined_dir"]

@@ -4,7 +4,7 @@ The optimizer competition tunes the soil's density rho (kg/m^3) and Young's modu
 that the simulated sinkage of a plate of radius 0.15 m under 100 kPa equals the sinkage that
 Bekker's pressure-sinkage law p = (k_c / b + k_phi) z^n gives for the study's sandbox soil.
 
-Model (SI, z up, axisymmetric finite elements from `calibration.soil_mesh`):
+Model (SI, z up, axisymmetric finite elements from `calibration.soil.mesh`):
 - Linear isotropic elasticity (E, nu) plus perfectly plastic Drucker-Prager
   f = sqrt(J2) + eta p - xi c <= 0 (p = mean stress, tension positive), cone matched to
   Mohr-Coulomb in triaxial compression; non-associated flow with dilatancy psi. Closed-form
@@ -34,8 +34,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .soil_mesh import block_tridiagonal_solve, build_mesh
-from ..errors import ConfigError, SimulationError
+from .mesh import block_tridiagonal_solve, build_mesh
+from ...errors import ConfigError, SimulationError
 
 # Suggested search box for the competition (see `suggested_bounds`): dry-to-saturated soil
 # densities and E of a soft, deformable sandbox soil. With the default spec the zero-error valley

@@ -3,7 +3,7 @@
 `run_calibration(spec, sim, out_dir)` is what `jtire calibrate` calls; tests call it with a
 stand-in simulator. The folder holds fingerprint.json (config, tire, simulator, version: a rerun
 with other settings refuses), history.jsonl (every evaluation; a killed run resumes from it with
-nothing lost or repeated) and the outputs of calibration.report.
+nothing lost or repeated) and the outputs of calibration.tire.report.
 """
 
 from pathlib import Path

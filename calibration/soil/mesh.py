@@ -29,7 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 from scipy.optimize import brentq
 
-from ..errors import ConfigError
+from ...errors import ConfigError
 
 _GAUSS = 1.0 / np.sqrt(3.0)
 # Gauss points of the 2 x 2 rule in (xi, eta); all weights are 1.

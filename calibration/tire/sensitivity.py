@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import atomic_savefig, atomic_write_csv, atomic_write_json
+from ...io import atomic_savefig, atomic_write_csv, atomic_write_json
 
 __all__ = ["Sensitivity", "compute", "identifiability", "write_sensitivity", "plot_heatmap"]
 

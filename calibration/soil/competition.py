@@ -25,11 +25,12 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from . import arsm, baselines
-from ..schema import Field, validate
-from ..config import read_toml
-from ..errors import ConfigError
-from ..io import atomic_write_json, remove_stale_temps
+from .. import arsm
+from . import baselines
+from ...schema import Field, validate
+from ...config import read_toml
+from ...errors import ConfigError
+from ...io import atomic_write_json, remove_stale_temps
 
 __all__ = ["METHODS", "CompetitionSpec", "load_config", "soil_objective", "standin_objective",
            "fingerprint", "run_competition"]  # the results: competition_report.py
@@ -195,7 +196,7 @@ def _target(method):
 
 
 def _soil_spec(cfg: dict):
-    from . import soil  # the soil model's spec (its checks); the FE solve is built only when run
+    from . import block as soil  # the soil model's spec (its checks); the FE solve is built only when run
 
     table = cfg.get("soil", {})
     if not isinstance(table, dict):
@@ -211,7 +212,7 @@ def load_config(path) -> dict:
 
 def soil_objective(cfg: dict):
     """The study's objective: |simulated - Bekker sinkage| / Bekker sinkage * 100 (percent)."""
-    from . import soil  # the finite-element model; imported only when used
+    from . import block as soil  # the finite-element model; imported only when used
 
     return soil.sinkage_objective(_soil_spec(cfg))
 

@@ -1,6 +1,6 @@
 """The check's correction of the emulator's predictive variance, and what its coverage can tell.
 
-After a round of the posterior check (calibration.sampling), the check runs are held out k-fold and
+After a round of the posterior check (calibration.posterior.run), the check runs are held out k-fold and
 the emulator's variance v is corrected per response so that a new run falls inside the corrected
 90 % interval with probability >= 90 % (split conformal): a factor a v (`conformal_scale`), a floor
 v + b (`conformal_floor`) or the wider of the two (`variance_correction`). COVERAGE_OK is the band

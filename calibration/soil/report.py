@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .competition import LABELS, VARIABLES, CompetitionSpec
-from .history import best_so_far
-from ..io import atomic_savefig, atomic_write_csv
+from ..history import best_so_far
+from ...io import atomic_savefig, atomic_write_csv
 
 __all__ = ["summarize", "calls_to_reach", "format_table", "plot_progression", "write_outputs"]
 

@@ -5,7 +5,7 @@
   the config gives them ([anchor]); a total row.
 - figure_4_6.png: each target's error (%) against evaluation number, and the total error with
   its running best (log scale).
-- calibrated_tire.toml: the input tire TOML with the calibrated values (calibration.tire_toml).
+- calibrated_tire.toml: the input tire TOML with the calibrated values (calibration.tire.tire_toml).
 - summary.json: best parameters (SI and file units), responses, errors, stop reason, cost in
   evaluations, batches, forward-run equivalents and simulator wall time.
 """
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .tire_toml import write_calibrated_tire
-from ..io import atomic_savefig, atomic_write_csv, atomic_write_json, atomic_write_text
+from ...io import atomic_savefig, atomic_write_csv, atomic_write_json, atomic_write_text
 
 __all__ = ["table_4_4", "format_markdown", "plot_errors", "write_outputs"]
 

@@ -17,14 +17,14 @@ ln(response) so that power laws become planes):
                                                                d + 1 + k (k + 1) / 2 terms
 
 z = 2 (u - c) / w over the fitting box (as in surrogates.quadratic). The choice for the tire
-(calibration.arsm_multi) was measured on the stand-in; see that module.
+(calibration.tire.arsm_multi) was measured on the stand-in; see that module.
 """
 
 import dataclasses
 
 import numpy as np
 
-from ..surrogates import fit_quadratic, n_terms
+from ...surrogates import fit_quadratic, n_terms
 
 __all__ = ["KINDS", "ProjectedQuadratic", "fit_responses", "terms"]
 

@@ -12,7 +12,7 @@ Model, in theta = ln(parameter) (the calibration's ParamSpace):
                  v_i the emulator's mean and predictive variance of ln(response) and sigma_i the
                  target's relative measurement uncertainty (the config says where it comes from),
                  combined with a model-discrepancy sd where the config asks for one
-                 (sigma_i^2 = measurement^2 + discrepancy^2; calibration/sampling.py says how
+                 (sigma_i^2 = measurement^2 + discrepancy^2; calibration/posterior/run.py says how
                  it is set).
 
 The log-probability is vectorized over walkers (emcee's vectorize=True): one emulator call per
@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from ..errors import ConfigError
+from ...errors import ConfigError
 
 __all__ = ["LogPosterior", "UnboundedPosterior", "SamplerResult", "run_sampler", "diagnostics",
            "prior_interval", "MOVES"]
@@ -202,44 +202,34 @@ def _read_h5(path: Path, walkers: int, d: int):
 
 
 def _write_h5(path: Path, chain, log_prob, accepted, random_state) -> None:
-    """chain.h5 in emcee's HDFBackend layout, written to a temp file and renamed (atomic)."""
-    import os
-    import tempfile
+    """chain.h5 in emcee's HDFBackend layout, built in memory and written atomically."""
+    import io
 
     import emcee
     import h5py
 
-    from ..io import current_umask
+    from ...io import atomic_write_bytes
 
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        with h5py.File(tmp, "w") as f:
-            g = f.create_group("mcmc")
-            g.attrs["version"] = emcee.__version__
-            g.attrs["nwalkers"], g.attrs["ndim"] = chain.shape[1], chain.shape[2]
-            g.attrs["has_blobs"] = False
-            g.attrs["iteration"] = chain.shape[0]
-            for i, v in enumerate(random_state):
-                g.attrs[f"random_state_{i}"] = v
-            g.create_dataset("accepted", data=accepted)
-            g.create_dataset("chain", data=chain, maxshape=(None, *chain.shape[1:]))
-            g.create_dataset("log_prob", data=log_prob, maxshape=(None, chain.shape[1]))
-            g.attrs[_COMPLETE] = True
-        os.chmod(tmp, 0o666 & ~current_umask())
-        with open(tmp, "rb") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    buf = io.BytesIO()
+    with h5py.File(buf, "w") as f:
+        g = f.create_group("mcmc")
+        g.attrs["version"] = emcee.__version__
+        g.attrs["nwalkers"], g.attrs["ndim"] = chain.shape[1], chain.shape[2]
+        g.attrs["has_blobs"] = False
+        g.attrs["iteration"] = chain.shape[0]
+        for i, v in enumerate(random_state):
+            g.attrs[f"random_state_{i}"] = v
+        g.create_dataset("accepted", data=accepted)
+        g.create_dataset("chain", data=chain, maxshape=(None, *chain.shape[1:]))
+        g.create_dataset("log_prob", data=log_prob, maxshape=(None, chain.shape[1]))
+        g.attrs[_COMPLETE] = True
+    atomic_write_bytes(path, buf.getvalue())
 
 
 def _write_chunk(folder: Path, start: int, chain, log_prob, accepted, random_state) -> None:
     import io
 
-    from ..io import atomic_write_bytes
+    from ...io import atomic_write_bytes
 
     buf = io.BytesIO()
     np.savez(buf, start=np.int64(start), chain=chain, log_prob=log_prob, accepted=accepted,

@@ -9,9 +9,9 @@ to hold exactly the new values (and to be a valid tire), so every command can ta
 import re
 import tomllib
 
-from ..config import tire_from_dict
-from ..errors import ConfigError
-from ..io import atomic_write_text
+from ...config import tire_from_dict
+from ...errors import ConfigError
+from ...io import atomic_write_text
 
 __all__ = ["substitute", "write_calibrated_tire"]
 

@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
-from ..config import parse_condition, validate_table
-from ..errors import ConfigError
+from ...config import parse_condition, validate_table
+from ...errors import ConfigError
 
 __all__ = ["Target", "parse_targets", "percent_errors", "total_error", "derived_quantity",
            "DEFAULT_QUANTITY", "MEASURED_UNITS"]
@@ -67,7 +67,7 @@ class Target:
 
 
 def _in_file_units(experiment: str, table: dict) -> dict:
-    from ..experiments import REGISTRY
+    from ...experiments import REGISTRY
 
     schema = REGISTRY[experiment].schema
     out = {}
@@ -88,7 +88,7 @@ def _quantity_suffix(q: str) -> str:
 
 def _track_linear(load_n: float, data_dir=None) -> tuple:
     """(force N, description) from the 120 psi linear track trend RRC(F_z) at load_n."""
-    from ..data import analyze  # the measured tables; loaded only when a config asks for them
+    from ...data import analyze  # the measured tables; loaded only when a config asks for them
 
     fit = analyze(data_dir).fits["track_120psi"].linear
     rrc = float(fit.predict(load_n).mean[0])
@@ -98,7 +98,7 @@ def _track_linear(load_n: float, data_dir=None) -> tuple:
 
 def parse_targets(raw, data_dir=None, where: str = "targets") -> tuple:
     """[targets.*] (or [checks.*], where="checks") -> tuple of Target, in config order."""
-    from ..experiments import REGISTRY  # the experiments and their table schemas
+    from ...experiments import REGISTRY  # the experiments and their table schemas
 
     if not isinstance(raw, dict) or not raw:
         raise ConfigError(f"{where}: missing; give one table [{where}.NAME] per measured response")

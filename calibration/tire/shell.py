@@ -1,6 +1,6 @@
 """The shell-model simulator behind calibration, sensitivities and the posterior check.
 
-`ShellSimulator` implements `calibration.simulator.Simulator` on the batch runner: a batch of
+`ShellSimulator` implements `calibration.tire.simulator.Simulator` on the batch runner: a batch of
 log-parameter vectors becomes one batch per experiment the targets use (every parameter set x every
 condition of that experiment, vmapped and sharded over the devices), reduced on the host exactly as
 `jtire run` reduces it. Its Jacobian is autodiff through the same programs with the experiments'
@@ -11,6 +11,11 @@ transients (checkpointed); the explicit step of each case is held fixed (a numer
 Sensitivity quantities beyond the targets (k_sv, k_l, k_by, k_btheta, k_bgamma, k_f, k_m, footprint
 length and width, rolling resistance) come from the experiments' traced reductions at the rated
 condition (`SENSITIVITY`).
+
+A free geometry parameter (`geometry.*`) changes the mesh, which is built in numpy and so not traced:
+each distinct section gets its own model (same structure: the compiled programs are reused), the
+points of an evaluation run grouped by section, and the Jacobian's geometry columns are forward
+differences (`FD_STEP` in theta, one evaluation per column).
 """
 
 import threading
@@ -20,13 +25,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .. import batch, cache
-from .. import units as U
-from ..config import parse_solver
-from ..experiments import REGISTRY, Case, Protocol
+from ... import batch, cache
+from ...config import parse_solver
+from ...experiments import REGISTRY, Case, Protocol
+from ...results import RATED
 from .simulator import Simulator
 
-RATED = {"load_N": 4625.0 * U.G0, "pressure_Pa": 120.0 * U.PSI}
+FD_STEP = 1e-3  # in theta = ln(value): 0.1 %; the static and steady solves converge to ~1e-6 relative
 # quantity -> (experiment, table overrides) for sensitivities at the rated condition
 SENSITIVITY = {
     "k_sv_N_per_m": ("vertical_stiffness", {}), "deflection_m": ("vertical_stiffness", {}),
@@ -41,7 +46,7 @@ SENSITIVITY = {
 
 
 def _table(name, overrides):
-    from ..config import validate_table
+    from ...config import validate_table
 
     raw = dict(overrides)
     if "slip_angles_deg" in raw:  # the table is validated in the file's units
@@ -51,7 +56,7 @@ def _table(name, overrides):
 
 class ShellSimulator(Simulator):
     def __init__(self, spec, tire_spec, solver=None, devices=None):
-        from ..tire import make_tire
+        from ...tire import make_tire
 
         self.spec = spec
         self.space = spec.space
@@ -62,7 +67,7 @@ class ShellSimulator(Simulator):
         self._solver = solver
         self.devices = devices
         # targets grouped by (experiment, table): one experiment instance, several conditions
-        from ..fingerprint import plain
+        from ...fingerprint import plain
 
         self.groups = []
         for j, t in enumerate(spec.targets):
@@ -96,7 +101,7 @@ class ShellSimulator(Simulator):
         self.on_case = None
 
     def fingerprint(self) -> dict:
-        from ..fingerprint import code_version, plain
+        from ...fingerprint import code_version, plain
 
         return {"simulator": "shell", "mesh": {"n_theta": self.tire.spec.n_theta, "n_side": self.tire.spec.n_side,
                                                "n_crown": self.tire.spec.n_crown,
@@ -110,6 +115,16 @@ class ShellSimulator(Simulator):
         sim = ShellSimulator(spec, self.tire.spec, self._solver, self.devices)
         sim.on_case = self.on_case
         return sim
+
+    def tire_at(self, theta):
+        """The tire with the section at theta (the base tire when no geometry is free)."""
+        import dataclasses
+
+        from ...tire import make_tire
+
+        if not self.space.geometry_indices:
+            return self.tire
+        return make_tire(dataclasses.replace(self.tire.spec, geometry=self.space.geometry_at(theta)))
 
     def params(self, theta):
         return self.space.to_params(jnp.asarray(theta, dtype=jnp.float64), self.base)
@@ -133,17 +148,27 @@ class ShellSimulator(Simulator):
         if self.on_case is not None:  # the bar appears at 0 of total, before the first case runs
             self.on_case(f"{n} parameter set{'s' * (n > 1)}", 0, total)
 
+        # rows sharing a section run together on its model (all rows: no free geometry)
+        sections = {}
+        for i, th in enumerate(thetas):
+            sections.setdefault(tuple(th[self.space.geometry_indices]), []).append(i)
+        sections = [(self.tire_at(thetas[rows[0]]), rows) for rows in sections.values()]
+
         def run_group(g, device=None):
+            for tire, rows in sections:
+                run_section(g, tire, rows, device)
+
+        def run_section(g, tire, rows, device):
             exp, tg = g["exp"], g["targets"]
             conds = [t.condition for _, t in tg]
             t0 = time.perf_counter()
-            res = batch.run(exp, self.tire, [c for _ in range(n) for c in conds],
-                            params_list=[p for p in plist for _ in conds], devices=self.devices, on_result=count,
-                            device=device)
+            res = batch.run(exp, tire, [c for _ in rows for c in conds],
+                            params_list=[plist[i] for i in rows for _ in conds], devices=self.devices,
+                            on_result=count, device=device)
             self.last_wall[exp.name] = time.perf_counter() - t0
-            for i in range(n):
+            for a, i in enumerate(rows):
                 for k, (j, t) in enumerate(tg):
-                    r = res[i * len(conds) + k]
+                    r = res[a * len(conds) + k]
                     if not isinstance(r, batch.CaseFailure):
                         out[i, j] = float(r.quantities[t.quantity])
                     else:  # the point's row keeps a nan; the history records why
@@ -213,10 +238,19 @@ class ShellSimulator(Simulator):
                 "reverse" if (exp.shardable or getattr(exp, "method", None) == "steady") and len(qs) < self.space.d
                 else "forward")
             t1 = time.perf_counter()
-            v, jac = traced_jacobian(exp, self.tire, self.params, theta, conds, qs, mode=mode)
+            v, jac = traced_jacobian(exp, self.tire_at(theta), self.params, theta, conds, qs, mode=mode)
             self.last_wall[f"jacobian {exp.name} ({mode})"] = time.perf_counter() - t1
             values[idx] = v
             J[idx] = jac
+        # geometry columns (the traced ones are 0: the model is held fixed): forward differences of
+        # plain runs on both sides (the host reductions, not mixed with the traced ones)
+        v0 = self._values(jobs, theta, len(names)) if self.space.geometry_indices else None
+        for i in self.space.geometry_indices:
+            t1 = time.perf_counter()
+            th = theta.copy()
+            th[i] += FD_STEP
+            J[:, i] = (self._values(jobs, th, len(names)) - v0) / FD_STEP
+            self.last_wall[f"jacobian {self.space.names[i]} (forward difference)"] = time.perf_counter() - t1
         if self.on_case is not None:
             self.on_case(label, len(jobs), len(jobs))
         self.last_wall["jacobian"] = time.perf_counter() - t0
@@ -225,6 +259,17 @@ class ShellSimulator(Simulator):
             # the targets measure tire + bias (the tire's columns are 0 there)
             values, J = self.space.add_bias_jacobian(theta, values, J, self.response_names)
         return values, J
+
+    def _values(self, jobs, theta, n):
+        """The jobs' quantities (n,) at theta by plain runs (a failed case: nan)."""
+        out = np.full(n, np.nan)
+        tire, p = self.tire_at(theta), self.params(theta)
+        for exp, conds, qs, idx in jobs:
+            res = batch.run(exp, tire, conds, params_list=[p] * len(conds), devices=self.devices)
+            for r, q, k in zip(res, qs, idx):
+                if not isinstance(r, batch.CaseFailure):
+                    out[k] = float(r.quantities[q])
+        return out
 
 
 def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: str = "forward"):
@@ -274,7 +319,7 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: s
     if mode == "forward":
         J, v = jax.jacfwd(with_value, has_aux=True)(th0)
     elif mode == "reverse":
-        from ..experiments.program import reverse_mode
+        from ...experiments.program import reverse_mode
 
         with reverse_mode():
             J, v = jax.jacrev(with_value, has_aux=True)(th0)
@@ -284,6 +329,6 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: s
 
 
 def make_simulator(config, tire_spec) -> ShellSimulator:
-    """The shell-model simulator for a calibration config (calibration.spec.CalibrationSpec:
+    """The shell-model simulator for a calibration config (calibration.tire.spec.CalibrationSpec:
     its space, targets and base_params) and a validated tire (jtire.config.TireSpec)."""
     return ShellSimulator(config, tire_spec)

@@ -21,8 +21,8 @@ import dataclasses
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..surrogates import fit_quadratic, n_terms
+from ...errors import ConfigError
+from ...surrogates import fit_quadratic, n_terms
 
 __all__ = ["Emulator", "fit_emulator", "gp_available", "usable", "CANDIDATES"]
 
@@ -116,7 +116,7 @@ class Emulator:
     LOO RMSE of ln(response)}} for every candidate tried; n_points: training points;
     var_scale a, var_floor b: (m,) the predictive variance v becomes max(a v, v + b) where b > 0, and
     a v where b = 0 (a = 1, b = 0 unless calibrated on held-out simulator runs:
-    `calibration.conformal.calibrate_variance`).
+    `calibration.posterior.conformal.calibrate_variance`).
     bias: (m, d) or None: the calibration's bias entries (`ParamSpace.bias_matrix`). The models are
     then fitted to the tire's own responses (a run's response less its bias, known exactly) and
     `predict` returns ln(tire + b), its variance mapped through the sum; `predict_tire` the tire's.

@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from .posterior import prior_interval
-from .targets import derived_quantity
-from ..io import atomic_savefig
+from .model import prior_interval
+from ..tire.targets import derived_quantity
+from ...io import atomic_savefig
 
 __all__ = ["predictive", "widths", "plot_corner", "simulator_check", "check_draws", "coverage",
            "coverage_interval"]

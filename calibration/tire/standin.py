@@ -14,6 +14,10 @@ shell model:
 - rolling-resistance force  FX = RRC(F_z) F_z with RRC = sidewall and shoulder loss x deflection
   (so FX grows like F_z^1.x and softer sidewalls lose more) + tread loss x F_z^0.2 + crown loss.
 
+- geometry (when free): the carcass term of k_v grows like crown_radius^0.3 (a flatter crown
+  spreads the load over more of the belt) and the sidewall's lateral term like
+  (widest_point_ratio / 0.5)^-0.5; both 1 at the shipped section.
+
 Its constants put the xone_xda defaults at DZ ~ 44 mm at 50 kN, DY ~ 12 mm at 5 kN and RRC
 ~ 0.02 (the test-track trend), so the study's targets are reachable inside the default bounds
 but not at the defaults. Everything is jax: the Jacobian is exact (autodiff through
@@ -50,26 +54,30 @@ def _x(params, field):
     return getattr(params, field) / REFERENCE[field]
 
 
-def stiffnesses(params, load_n):
-    """(k_v, k_lat) in N/m of the stand-in at vertical load load_n (N)."""
+def stiffnesses(params, load_n, geo=None):
+    """(k_v, k_lat) in N/m of the stand-in at vertical load load_n (N); geo: {Geometry field: SI
+    value} (`ParamSpace.geometry_values`; absent fields at the shipped section)."""
+    geo = geo or {}
+    crown = geo.get("crown_radius", 2.0) / 2.0
+    widest = geo.get("widest_point_ratio", 0.5) / 0.5
     t = _x(params, "thickness")
     m = jnp.sum(_SIDEWALL_W * _x(params, "E_meridional") * t)
     b = jnp.sum(_BEND_W * _x(params, "E_bending") * t**3)
     c = jnp.sum(_SIDEWALL_W * _x(params, "E_circumferential") * t)
     s = jnp.sum(_SIDEWALL_W * _x(params, "G_shear") * t)
     k_p = 500e3
-    k_carc = 300e3 * m**0.3 + 200e3 * b**0.7 + 100e3 * c**0.5 + 50e3 * s**0.5
+    k_carc = (300e3 * m**0.3 + 200e3 * b**0.7 + 100e3 * c**0.5 + 50e3 * s**0.5) * crown**0.3
     k_tread = 8e6 * _x(params, "tread_E") ** 0.8 * _x(params, "undertread_E") ** 0.2
     k_v = 1.0 / (1.0 / (k_p + k_carc) + 1.0 / k_tread)
-    k_sw_lat = 250e3 * c**0.4 * b**0.3 + 150e3 * s**0.5 + 0.15 * k_p
+    k_sw_lat = (250e3 * c**0.4 * b**0.3 + 150e3 * s**0.5) * widest**-0.5 + 0.15 * k_p
     k_tr_lat = 3e6 * _x(params, "tread_G") * (load_n / 45.4e3) ** 0.5
     k_lat = 1.0 / (1.0 / k_sw_lat + 1.0 / k_tr_lat)
     return k_v, k_lat
 
 
-def rolling_resistance(params, load_n):
+def rolling_resistance(params, load_n, geo=None):
     """Stand-in drag force (N) at vertical load load_n (N)."""
-    k_v, _ = stiffnesses(params, load_n)
+    k_v, _ = stiffnesses(params, load_n, geo)
     delta = load_n / k_v / _DELTA_REF
     loss = params.loss
     l_sw = jnp.sum(_SIDEWALL_W * loss) + 0.3 * loss[4]
@@ -78,25 +86,25 @@ def rolling_resistance(params, load_n):
     return rrc * load_n
 
 
-def footprint(params, load_n):
+def footprint(params, load_n, geo=None):
     """Stand-in footprint (length, width), m, at vertical load load_n (N): half the chord of a 0.51 m
     circle cut at the stand-in's deflection (the tread and belt spread a deflection; the shell model's
     E01 patch is about half its geometric chord), and a width that grows from 0.30 m with it."""
-    delta = load_n / stiffnesses(params, load_n)[0]
+    delta = load_n / stiffnesses(params, load_n, geo)[0]
     return jnp.sqrt(2.0 * 0.5095 * delta - delta**2), 0.30 + 2.0 * delta
 
 
-def _response(params, target):
+def _response(params, target, geo=None):
     exp, q, cond, table = target.experiment, target.quantity, target.condition, target.table
     if exp == "footprint" and q in ("contact_length_m", "contact_width_m"):
-        return footprint(params, cond["load_N"])[q == "contact_width_m"]
+        return footprint(params, cond["load_N"], geo)[q == "contact_width_m"]
     if exp == "vertical_stiffness" and q == "deflection_m":
         force = table.get("stated_load_kN") or cond["load_N"]
-        return force / stiffnesses(params, force)[0]
+        return force / stiffnesses(params, force, geo)[0]
     if exp == "lateral_stiffness" and q == "lateral_deflection_m":
-        return table["force_kN"] / stiffnesses(params, cond["load_N"])[1]
+        return table["force_kN"] / stiffnesses(params, cond["load_N"], geo)[1]
     if exp == "rolling_resistance" and q == "rolling_resistance_N":
-        return rolling_resistance(params, cond["load_N"])
+        return rolling_resistance(params, cond["load_N"], geo)
     raise ValueError(f"stand-in simulator: no stand-in for {exp}.{q} (target {target.name})")
 
 
@@ -116,13 +124,14 @@ class StandinSimulator(Simulator):
         self.cost_forward_equivalents = {
             "evaluate": 1.0, "jacobian": float(space.d if jacobian_cost is None else jacobian_cost)}
         self.n_points, self.batches, self.n_jacobians = 0, [], 0
-        extra = {"k_v_N_per_m": lambda p: stiffnesses(p, 45.4e3)[0],
-                 "k_lat_N_per_m": lambda p: stiffnesses(p, 45.4e3)[1]}
-        self._quantities = {t.name: (lambda p, t=t: _response(p, t)) for t in self.targets}
+        extra = {"k_v_N_per_m": lambda p, g: stiffnesses(p, 45.4e3, g)[0],
+                 "k_lat_N_per_m": lambda p, g: stiffnesses(p, 45.4e3, g)[1]}
+        self._quantities = {t.name: (lambda p, g, t=t: _response(p, t, g)) for t in self.targets}
         self._quantities.update(extra)
         self.quantity_names = tuple(self._quantities)
         base = self.base
-        f = lambda th: jnp.stack([_response(space.to_params(th, base), t) for t in self.targets])  # noqa: E731
+        f = lambda th: jnp.stack([_response(space.to_params(th, base), t, space.geometry_values(th))  # noqa: E731
+                                  for t in self.targets])
         self._batch = jax.jit(jax.vmap(f))
         self._jac = {}
 
@@ -149,7 +158,8 @@ class StandinSimulator(Simulator):
                            f"{list(self.quantity_names)}")
         if names not in self._jac:
             base, space = self.base, self.space
-            f = lambda th: jnp.stack([self._quantities[q](space.to_params(th, base)) for q in names])  # noqa: E731
+            f = lambda th: jnp.stack([self._quantities[q](space.to_params(th, base), space.geometry_values(th))  # noqa: E731
+                                      for q in names])
             self._jac[names] = jax.jit(lambda th: (f(th), jax.jacfwd(f)(th)))
         th = jnp.asarray(np.asarray(theta, dtype=float))
         self.n_jacobians += 1

@@ -12,19 +12,19 @@
                  moves = "de" | "stretch", coordinates = "logit" | "log"
     [check]      draws, seed, refine = true | false, folds, rounds (refined rounds at most),
                  variance = "wider" | "floor" | "scale" (how the held-out runs correct the predictive variance:
-                 calibration.conformal.calibrate_variance)
+                 calibration.posterior.conformal.calibrate_variance)
 """
 
 import dataclasses
 import math
 from pathlib import Path
 
-from ..schema import Field as F
-from ..config import apply_overrides, load_toml, validate_table
-from ..errors import ConfigError
+from ...schema import Field as F
+from ...config import apply_overrides, load_toml, validate_table
+from ...errors import ConfigError
 from .emulator import CANDIDATES
-from .posterior import MOVES
-from .spec import load_calibration
+from .model import MOVES
+from ..tire.spec import load_calibration
 
 __all__ = ["PosteriorSpec", "load_posterior", "PRIORS", "SAMPLER_SCHEMA"]
 
@@ -98,7 +98,7 @@ def _pop_choices(table, name: str, choices: dict):
 
 
 def _track_sigma(target, kind: str) -> tuple:
-    from ..data import analyze
+    from ...data import analyze
 
     load = target.condition.get("load_N")
     if target.quantity != "rolling_resistance_N" or load is None:

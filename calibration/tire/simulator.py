@@ -3,7 +3,7 @@
 Everything in calibration/ (ARSM, the gradient route, sensitivities, the posterior's emulator
 and its simulator check) sees the tire only through a `Simulator`: a batch of log-parameter
 vectors in, the target responses out. The shell-model implementation lives with the batched
-runner (`calibration.shell.make_simulator`); the tests use cheap stand-ins (`calibration.standin`).
+runner (`calibration.tire.shell.make_simulator`); the tests use cheap stand-ins (`calibration.tire.standin`).
 
 Contract (what an implementation must provide):
 

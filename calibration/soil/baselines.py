@@ -19,9 +19,9 @@ from pymoo.algorithms.soo.nonconvex.ga import GA
 from pymoo.core.problem import ElementwiseProblem
 from pymoo.optimize import minimize as _pymoo_minimize
 
-from .history import BudgetExhausted, Evaluator, OptimizeResult
-from ..errors import ConfigError
-from ..surrogates import as_bounds, latin_hypercube, to_bounds
+from ..history import BudgetExhausted, Evaluator, OptimizeResult
+from ...errors import ConfigError
+from ...surrogates import as_bounds, latin_hypercube, to_bounds
 
 __all__ = ["genetic_algorithm", "monte_carlo", "latin_hypercube_search"]
 
