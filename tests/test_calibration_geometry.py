@@ -140,7 +140,9 @@ def coarse_dz():
     return study, spec, ShellSimulator(spec, spec.tire)
 
 
+@pytest.mark.slow
 def test_a_geometry_point_is_the_tire_file_at_that_geometry(coarse_dz):
+    """Slow: 50 s from a cold compile cache (the fast suite's 15-minute budget)."""
     from jtire.calibration.tire.shell import ShellSimulator
     from jtire.calibration.tire.spec import load_calibration
 
