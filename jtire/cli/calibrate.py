@@ -81,6 +81,12 @@ def run_cli(args, say) -> int:
     spec = load_calibration(args.config, args.set)
     if args.budget is not None and not args.budget >= 1:
         raise ConfigError(f"--budget = {args.budget:g}: must be >= 1")
+    budget = spec.arsm["budget"] if args.budget is None else args.budget
+    n0 = spec.space.d + 2
+    if (args.method or spec.method) == "arsm" and not spec.arsm["n_initial"] and budget < n0:
+        raise ConfigError(f"budget = {budget:g}: ARSM's initial design alone is d + 2 = {n0} evaluations for "
+                          f"{spec.space.d} free parameters; give a budget >= {n0} (--budget) or a smaller "
+                          "arsm.n_initial (>= 2)")
     out = Path(args.out) if args.out else Path("runs") / "calibrate" / (
         Path(args.config).stem + ("_standin" if args.standin else ""))
     check_writable(out)
