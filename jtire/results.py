@@ -115,11 +115,11 @@ def find_case(cases_root, load_N, pressure_Pa) -> Path | None:
     return None
 
 
-def write_summary(folder, names, conds, results, per_pressure: bool) -> Path:
+def write_summary(folder, names, conds, found, per_pressure: bool) -> Path:
     """DIR/summary.csv: one row per case (result dicts, None for a failed one), its condition and its
     numeric quantities."""
     keys, rows = [], []
-    for n, c, r in zip(names, conds, results):
+    for n, c, r in zip(names, conds, found):
         q = {} if r is None else {k: v for k, v in r["quantities"].items() if isinstance(v, (int, float)) or v is None}
         keys += [k for k in q if k not in keys]
         rows.append((n, c, q))

@@ -242,9 +242,6 @@ def calibrate_arsm(sim, targets, log: RunLog, seed: int = 0, batch_size: int = 4
     if region_rule not in RULES:
         raise ConfigError(f"arsm.region_rule = {region_rule!r}: must be one of {RULES}")
     n0 = d + 2 if not n_initial else int(n_initial)
-    if not n_initial and n0 > log.budget:  # the default design: say what the user can change
-        raise ConfigError(f"budget = {log.budget}: ARSM's initial design alone is d + 2 = {n0} evaluations for "
-                          f"{d} free parameters; give a budget >= {n0} (--budget) or a smaller arsm.n_initial (>= 2)")
     if not 2 <= n0 <= log.budget:
         raise ConfigError(f"arsm.n_initial = {n0}: must be in [2, budget = {log.budget}]")
     w = np.ones(m) if weights is None else np.asarray(weights, float)

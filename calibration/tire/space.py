@@ -37,6 +37,7 @@ import numpy as np
 from ... import units as U
 from ...errors import ConfigError
 from ...mesh import PART_NAMES
+from .free_entries import check_geometry_bounds, is_num, parse_bias
 
 __all__ = ["PER_PART_FIELDS", "SCALAR_LEAVES", "ParamSpace", "allowed_names", "leaf_of"]
 
@@ -59,11 +60,11 @@ _FILE_UNITS = {"E_meridional": ("E_meridional_MPa", U.MPA, "MPa"),
 
 # config name -> Geometry field (the section's shape: `jtire.mesh.section_profile`)
 GEOMETRY_LEAVES = {"geometry.crown_radius": "crown_radius", "geometry.widest_point_ratio": "widest_point_ratio"}
+GEOMETRY_FIELDS = tuple(GEOMETRY_LEAVES.values())
 _FILE_UNITS.update({"crown_radius": ("crown_radius_mm", U.MM, "mm"),
                     "widest_point_ratio": ("widest_point_ratio", 1.0, "")})
 BIAS = "bias"  # the field of a bias entry (not a MaterialParams leaf)
 LINEAR_FIELDS = (BIAS, "nodal_damping")
-_SI_UNIT = {"_N": "N", "_m": "m", "_N_per_m": "N/m", "": ""}
 
 
 def allowed_names() -> str:
@@ -86,10 +87,6 @@ def leaf_of(name: str):
     if len(bits) == 3 and bits[0] == "parts" and bits[1] in PART_NAMES and bits[2] in PER_PART_FIELDS:
         return bits[2], PART_NAMES.index(bits[1])
     return None
-
-
-def _is_num(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -321,7 +318,7 @@ class ParamSpace:
                 raise ConfigError(f"{at}.why: must be a string (a one-line reason)")
             field, part = leaf
             if field == BIAS:
-                b_lo, b_hi, tnames, unit = _parse_bias(e, at, name, targets)
+                b_lo, b_hi, tnames, unit = parse_bias(e, at, name, targets)
                 names.append(name), fields.append(field), parts.append(-1)
                 lo.append(b_lo), hi.append(b_hi), reasons.append(r)
                 btargets.append(tnames), bunits.append(unit)
@@ -342,7 +339,7 @@ class ParamSpace:
                                   "tire's value) or bounds = [lo, hi] (the tire file's unit)")
             key = "factor" if "factor" in e else "bounds"
             b = e[key]
-            if not (isinstance(b, list) and len(b) == 2 and all(_is_num(x) for x in b)):
+            if not (isinstance(b, list) and len(b) == 2 and all(is_num(x) for x in b)):
                 raise ConfigError(f"{at}.{key} = {b!r} ({name}): must be two numbers [lo, hi]")
             if not (0 <= b[0] < b[1] if linear else 0 < b[0] < b[1]):
                 raise ConfigError(f"{at}.{key} = {b!r} ({name}): must satisfy {'0 <=' if linear else '0 <'} "
@@ -357,7 +354,7 @@ class ParamSpace:
                 raise ConfigError(f"{at}.{key} = {b!r} ({name}): must contain the tire's value "
                                   f"{v0 / factor:g}{' ' + unit if unit else ''}")
             if field in GEOMETRY_FIELDS:
-                _check_geometry_bounds(geometry, field, (lo_si, hi_si), f"{at}.{key} = {b!r} ({name})")
+                check_geometry_bounds(geometry, field, (lo_si, hi_si), f"{at}.{key} = {b!r} ({name})", factor)
             names.append(name), fields.append(field), parts.append(part)
             lo.append(lo_si if linear else math.log(lo_si)), hi.append(hi_si if linear else math.log(hi_si))
             reasons.append(r), btargets.append(()), bunits.append("")
@@ -367,47 +364,3 @@ class ParamSpace:
                     np.zeros(len(names)), tuple(reasons), tuple(btargets), tuple(bunits), geometry)
         default = np.clip(space.from_params(base), space.lower, space.upper)
         return dataclasses.replace(space, default=default)
-
-
-GEOMETRY_FIELDS = tuple(GEOMETRY_LEAVES.values())
-
-
-def _check_geometry_bounds(geometry, field, bounds, at):
-    """Both ends of a geometry parameter's range must give a section the mesh builds (each check
-    is monotone in one field, so the ends decide the whole range)."""
-    from ...config import _check_geometry
-
-    for v in bounds:
-        try:
-            _check_geometry(dataclasses.replace(geometry, **{field: v}))
-        except ConfigError as e:
-            raise ConfigError(f"{at}: at {v / _FILE_UNITS[field][1]:g} the section is not valid: {e}") from None
-
-
-def _parse_bias(e, at, name, targets):
-    """A bias entry's (lower, upper, target names, SI unit), checked against the targets."""
-    from .targets import _quantity_suffix
-
-    if "factor" in e:
-        raise ConfigError(f"{at}.factor ({name}): a bias has no tire value to scale; give "
-                          "bounds = [lo, hi] in its targets' SI unit")
-    b = e.get("bounds")
-    if not (isinstance(b, list) and len(b) == 2 and all(_is_num(x) for x in b)):
-        raise ConfigError(f"{at}.bounds = {b!r} ({name}): must be two numbers [lo, hi] in the SI "
-                          "unit of its targets")
-    if not 0 <= b[0] < b[1]:
-        raise ConfigError(f"{at}.bounds = {b!r} ({name}): must satisfy 0 <= lo < hi (a bias is "
-                          "non-negative: what the tire alone cannot give)")
-    known = {t.name: t for t in (targets or ())}
-    tn = e.get("targets")
-    if not (isinstance(tn, list) and tn and all(isinstance(x, str) for x in tn)):
-        raise ConfigError(f"{at}.targets = {tn!r} ({name}): must be a non-empty list of target names")
-    for x in tn:
-        if x not in known:
-            raise ConfigError(f"{at}.targets: {x!r} is not a target (targets: "
-                              f"{', '.join(known) or 'none'})")
-    suffixes = {_quantity_suffix(known[x].quantity) for x in tn}
-    if len(suffixes) != 1:
-        raise ConfigError(f"{at}.targets = {tn!r} ({name}): one bias adds to quantities of one "
-                          "unit; these differ")
-    return float(b[0]), float(b[1]), tuple(tn), _SI_UNIT[suffixes.pop()]

@@ -130,8 +130,10 @@ class StandinSimulator(Simulator):
         self._quantities.update(extra)
         self.quantity_names = tuple(self._quantities)
         base = self.base
-        f = lambda th: jnp.stack([_response(space.to_params(th, base), t, space.geometry_values(th))  # noqa: E731
-                                  for t in self.targets])
+        def f(th):  # the parameters and the section once per point, then every target
+            p, g = space.to_params(th, base), space.geometry_values(th)
+            return jnp.stack([_response(p, t, g) for t in self.targets])
+
         self._batch = jax.jit(jax.vmap(f))
         self._jac = {}
 
@@ -158,8 +160,10 @@ class StandinSimulator(Simulator):
                            f"{list(self.quantity_names)}")
         if names not in self._jac:
             base, space = self.base, self.space
-            f = lambda th: jnp.stack([self._quantities[q](space.to_params(th, base), space.geometry_values(th))  # noqa: E731
-                                      for q in names])
+            def f(th):
+                p, g = space.to_params(th, base), space.geometry_values(th)
+                return jnp.stack([self._quantities[q](p, g) for q in names])
+
             self._jac[names] = jax.jit(lambda th: (f(th), jax.jacfwd(f)(th)))
         th = jnp.asarray(np.asarray(theta, dtype=float))
         self.n_jacobians += 1
