@@ -56,6 +56,14 @@ def enable(path=None):
     return path
 
 
+def active_dir():
+    """The folder this process's persistent cache writes to, or None when it is off."""
+    import jax
+
+    d = jax.config.jax_compilation_cache_dir
+    return Path(d) if d else None
+
+
 # ---- compiled programs held in memory ---------------------------------------------------------------
 # XLA on the CPU keeps every compiled program's kernels in memory maps of their own (measured: ~200 maps
 # for a 60-operation program, ~700 for a phase program), and Linux caps a process at vm.max_map_count

@@ -40,6 +40,7 @@ class Plan:
     pressures: tuple  # Pa
     rated: dict
     solver: dict
+    tables: dict = dataclasses.field(default_factory=dict)  # experiment name -> its validated table (SI)
 
 
 def load_plan(path, tire_file=None, overrides=()) -> Plan:
@@ -72,8 +73,8 @@ def load_plan(path, tire_file=None, overrides=()) -> Plan:
     _, tire = read_tire_file(tire_path, tire_over)
     solver = parse_solver(raw.get("solver", {}))
     proto = Protocol.from_dict(solver)
-    exps = tuple(REGISTRY[n].from_table(validate_table(raw.get(n, {}), REGISTRY[n].schema, n), proto, tire)
-                 for n in names)
+    tables = {n: validate_table(raw.get(n, {}), REGISTRY[n].schema, n) for n in names}
+    exps = tuple(REGISTRY[n].from_table(tables[n], proto, tire) for n in names)
     g = validate_table(raw.get("grid", {}), GRID_SCHEMA, "grid")
     conditions = tuple(results.grid_conditions(g, "grid"))
     for e in exps:
@@ -84,7 +85,7 @@ def load_plan(path, tire_file=None, overrides=()) -> Plan:
     if not any(abs(c["load_N"] - rated["load_N"]) < 1e-6 and abs(c["pressure_Pa"] - rated["pressure_Pa"]) < 1e-3
                for c in conditions):
         raise ConfigError("grid.rated_load_kg, grid.rated_pressure_psi: must be one of the grid's conditions")
-    return Plan(path, tire, tire_path, exps, conditions, tuple(g["pressures_psi"]), rated, solver)
+    return Plan(path, tire, tire_path, exps, conditions, tuple(g["pressures_psi"]), rated, solver, tables)
 
 
 def experiment_conditions(plan: Plan, exp) -> list:
@@ -96,46 +97,48 @@ def settings(plan: Plan) -> dict:
             "solver": plan.solver, "rated": plan.rated, "jtire": code_version()}
 
 
-def run(plan: Plan, out, batch_size: int = 1, progress=None, on_case=None) -> dict:
+def run(plan: Plan, out, batch_size: int = 1, progress=None, on_case=None, executor=None) -> dict:
     """Run every experiment of the plan into `out` (resuming). Returns {experiment: [result dicts or
     None (failed), one per condition]}. progress: a callable(n_done_increment) or None; on_case(name,
-    condition, error_or_None) after every case."""
-    from .tire import make_tire
+    condition, error_or_None) after every case. executor: where the cases run (`jtire.executor`; default
+    the current one: in this process, an experiment after another, unless --cluster named a cluster, which
+    gets every unfinished case at once). This process writes every case folder and summary."""
+    from .executor import CaseTask, current
 
     out = Path(out)
     check_writable(out)
     claim_folder(out, settings(plan))
-    tire = None
+    tasks, where = [], []  # where[k]: (experiment, case folder, condition) of tasks[k]
+    for exp in plan.experiments:
+        conds = experiment_conditions(plan, exp)
+        folder = results.cases_dir(out, exp.name)
+        for i, c in enumerate(conds):
+            case = folder / results.case_name(i, c)
+            if not results.is_done(case):
+                tasks.append(CaseTask(exp.name, plan.tables[exp.name], plan.solver, plan.tire, c,
+                                      contact_table=exp.name == "footprint"))
+                where.append((exp, case, c))
+
+    def save(k, outcome):
+        exp, case, cond = where[k]
+        if isinstance(outcome.result, batch.CaseFailure):
+            results.save_failure(case, outcome.result.error)
+            err = outcome.result.error
+        else:
+            results.save(case, outcome.result, outcome.tables)
+            err = None
+        if progress is not None:
+            progress(len(exp.cases(cond)))
+        if on_case is not None:
+            on_case(f"{exp.name}/{case.name}", cond, err)
+
+    if tasks:
+        (executor or current()).run(tasks, save, batch_size=batch_size)
     found = {}
     for exp in plan.experiments:
         conds = experiment_conditions(plan, exp)
         folder = results.cases_dir(out, exp.name)
         names = [results.case_name(i, c) for i, c in enumerate(conds)]
-        todo = [i for i, n in enumerate(names) if not results.is_done(folder / n)]
-        if todo:
-            tire = tire or make_tire(plan.tire)
-
-            def save(k, res, todo=todo, names=names, conds=conds, folder=folder):
-                i = todo[k]
-                if isinstance(res, batch.CaseFailure):
-                    results.save_failure(folder / names[i], res.error)
-                    err = res.error
-                else:
-                    tables = {}
-                    if footprint:  # the contact pressure over the patch (Figure 5-2)
-                        from .contact_pressure import footprint_table
-
-                        o = res.outputs[0]
-                        tables["contact_pressure"] = footprint_table(tire.model, tire.params, o["y"], float(o["z_road"]))
-                    results.save(folder / names[i], res, tables)
-                    err = None
-                if progress is not None:
-                    progress(len(exp.cases(conds[i])))
-                if on_case is not None:
-                    on_case(f"{exp.name}/{names[i]}", conds[i], err)
-
-            footprint = exp.name == "footprint"
-            batch.run(exp, tire, [conds[i] for i in todo], batch=batch_size, on_result=save, keep_outputs=footprint)
         found[exp.name] = [results.read_result(folder / n) for n in names]
         results.write_summary(out / exp.name, names, conds, found[exp.name], exp.per_pressure)
     return found

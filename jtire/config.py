@@ -320,6 +320,7 @@ class RunConfig:
     solver: dict
     sweep: dict
     path: Path
+    tables: dict = dataclasses.field(default_factory=dict)  # experiment name -> its validated table (SI)
 
 
 def experiment_names(raw: dict, path: Path, registry) -> list:
@@ -376,4 +377,4 @@ def load_run_config(path, overrides=(), registry=None) -> RunConfig:
     sweep = raw.get("sweep", {})
     if not isinstance(sweep, dict):
         raise ConfigError("sweep: must be a table")
-    return RunConfig(tire, exps, condition, solver, sweep, path)
+    return RunConfig(tire, exps, condition, solver, sweep, path, {n: tables[n] for n in names})

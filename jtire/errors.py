@@ -15,3 +15,8 @@ class ConfigError(JtireError, ValueError):
 
 class SimulationError(JtireError, RuntimeError):
     """A simulation went unstable or failed to settle; the message says where and when."""
+
+
+class ClusterError(JtireError, RuntimeError):
+    """The cluster named by --cluster cannot be used (unreachable, another jtire build, a case that killed
+    its workers); the message says which and what to do."""

@@ -45,6 +45,8 @@ COVERED = {
     r"jtire export-vtk runs/e09": "test_frames_and_vtk",
     r"jtire characterize --out runs/characterize": "test_characterize",
     r"jtire characterize --tire runs/calibrate/study/calibrated_tire\.toml --out runs/char_cal": "test_characterize",
+    r"jtire --cluster local:2 sweep configs/experiments/footprint\.toml --out runs/grid": "test_cluster_commands",
+    r"jtire --cluster local:2 characterize --out runs/characterize": "test_cluster_commands",
     r"jtire data( --out runs/data)?": "test_data",
     r"jtire compete configs/calibration/soil_competition\.toml": "test_compete",
     r"jtire calibrate configs/calibration/study\.toml --out runs/calibrate/study": "test_calibrate_sensitivity_sample",
@@ -292,6 +294,25 @@ def test_characterize(user_dir, capsys):
     assert jtire("jtire characterize --tire runs/calibrate/study/calibrated_tire.toml --out runs/char_cal", *small,
                  "--no-validate") == 0
     assert (user_dir / "runs" / "char_cal" / "tire.tir").is_file()
+
+
+@pytest.mark.slow
+@pytest.mark.gate
+def test_cluster_commands(user_dir, capsys, e01_grid):
+    """The README's cluster commands on two local Dask workers: the 2 x 2 grid (static E01) with the
+    numbers of the same sweep in this process, and a characterization at one condition (E01 and E02,
+    no validation). The cluster's own checks (kills, other builds, byte for byte): tests/test_cluster.py."""
+    pytest.importorskip("distributed", reason="the cluster extras: pip install -e '.[cluster]'")
+    assert jtire("jtire --cluster local:2 sweep configs/experiments/footprint.toml --out runs/grid", *QUICK_SIM,
+                 *GRID_2X2) == 0
+    assert jtire("jtire sweep configs/experiments/footprint.toml --out runs/grid_here", *QUICK_SIM, *GRID_2X2) == 0
+    runs = user_dir / "runs"
+    assert (runs / "grid" / "summary.csv").read_bytes() == (runs / "grid_here" / "summary.csv").read_bytes()
+    small = ["--set", "grid.loads_kg=[4625.0]", "--set", "grid.pressures_psi=[120.0]",
+             "--set", 'experiments=["footprint", "vertical_stiffness"]', "--no-validate", *QUICK_SIM]
+    assert jtire("jtire --cluster local:2 characterize --out runs/characterize", *small) == 0
+    assert (runs / "characterize" / "tire.tir").is_file()
+    assert len(list((runs / "characterize").glob("*/cases/*/result.json"))) == 2
 
 
 # ---- data, competition, figures -----------------------------------------------------------------

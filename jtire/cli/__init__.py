@@ -6,8 +6,10 @@ non-zero exit. Library modules never print; this is the only place that writes t
 """
 
 import argparse
+import contextlib
 import importlib
 import importlib.util
+import os
 import sys
 
 # subcommand -> (module, one-line help). Each module defines `add_arguments(parser)` and
@@ -26,6 +28,26 @@ SUBCOMMANDS = {
     "sensitivity": ("jtire.cli.sensitivity", "d(quantity)/d(log parameter) table, heat map and identifiable directions"),
     "export-vtk": ("jtire.cli.export_vtk", "a run's recorded frames as ParaView .vtu files and a .pvd time series"),
 }
+
+
+# subcommands whose cases go to the executor --cluster names (`jtire.executor`)
+ON_CLUSTER = ("sweep", "characterize")
+
+
+@contextlib.contextmanager
+def _executor(args):
+    """The executor --cluster (or JTIRE_CLUSTER) names, made current for the subcommand; none: in-process."""
+    if not args.cluster:
+        yield None
+        return
+    from jtire import executor
+    from jtire.errors import ConfigError
+
+    if args.command not in ON_CLUSTER:
+        raise ConfigError(f"--cluster {args.cluster}: only {' and '.join(ON_CLUSTER)} run on a cluster so far "
+                          f"(unset JTIRE_CLUSTER, or drop --cluster, for {args.command})")
+    with executor.connect(args.cluster, args.cluster_config) as ex, executor.using(ex):
+        yield ex
 
 
 class UserError(Exception):
@@ -60,6 +82,14 @@ def build_parser():
     parser.add_argument("--no-cache", action="store_true",
                         help="do not use the persistent compilation cache (default: on, in the user's cache folder; "
                              "JTIRE_CACHE_DIR sets the folder)")
+    parser.add_argument("--cluster", default=os.environ.get("JTIRE_CLUSTER") or None, metavar="SPEC",
+                        help="run the cases of `sweep` and `characterize` on a Dask cluster: local:N (N worker "
+                             "processes here), tcp://HOST:PORT (a running scheduler), slurm or pbs (settings in "
+                             "cluster.toml); default: in this process (JTIRE_CLUSTER sets it too). Needs "
+                             "pip install 'jtire[cluster]'")
+    parser.add_argument("--cluster-config", default=None, metavar="FILE",
+                        help="the cluster.toml of --cluster slurm|pbs (default: $JTIRE_CLUSTER_CONFIG, ./cluster.toml, "
+                             "~/.config/jtire/cluster.toml)")
     sub = parser.add_subparsers(dest="command", required=True)
     for name, (mod, helptext) in _available().items():
         p = sub.add_parser(name, help=helptext, description=helptext)
@@ -80,7 +110,8 @@ def main(argv=None):
 
         cache.enable()
     try:
-        return int(args._module.run_cli(args, _say) or 0)
+        with _executor(args):
+            return int(args._module.run_cli(args, _say) or 0)
     except JtireError as e:
         _say(f"jtire {args.command}: error: {e}", err=True)
         return 2

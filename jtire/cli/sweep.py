@@ -45,7 +45,6 @@ def run_cli(args, say) -> int:
     from .. import batch
     from ..config import load_run_config
     from ..fingerprint import claim_folder
-    from ..tire import make_tire
 
     rc = load_run_config(args.config, args.overrides)
     if len(rc.experiments) != 1:
@@ -67,19 +66,21 @@ def run_cli(args, say) -> int:
         say(f"resuming: {len(conditions) - len(todo)} of {len(conditions)} cases already done in {out}", err=True)
     failures = []
     if todo:
-        tire = make_tire(rc.tire)
-        bar = tqdm(total=len(todo), desc=f"sweep {exp.name}", unit="case")
+        from ..executor import CaseTask, current
 
-        def save(k, res):
+        bar = tqdm(total=len(todo), desc=f"sweep {exp.name}", unit="case")
+        tasks = [CaseTask(exp.name, rc.tables[exp.name], rc.solver, rc.tire, conditions[i]) for i in todo]
+
+        def save(k, outcome):
             i = todo[k]
-            if isinstance(res, batch.CaseFailure):
-                failures.append(f"{names[i]}: {res.error}")
-                results.save_failure(cases / names[i], res.error)
+            if isinstance(outcome.result, batch.CaseFailure):
+                failures.append(f"{names[i]}: {outcome.result.error}")
+                results.save_failure(cases / names[i], outcome.result.error)
             else:
-                results.save(cases / names[i], res)
+                results.save(cases / names[i], outcome.result)
             bar.update(1)
 
-        batch.run(exp, tire, [conditions[i] for i in todo], batch=args.batch, on_result=save)
+        current().run(tasks, save, batch_size=args.batch)
         bar.close()
     done = [(n, c, results.read_result(cases / n)) for n, c in zip(names, conditions) if results.is_done(cases / n)]
     results.write_summary(out, [n for n, _, _ in done], [c for _, c, _ in done], [r for _, _, r in done],
