@@ -31,6 +31,16 @@ class CaseTask:
     tire: object  # config.TireSpec: numbers only
     condition: dict
     contact_table: bool = False  # also return the contact pressure over the patch (the footprint's Figure 5-2)
+    params: tuple | None = None  # a calibration's material parameters: the leaves (numpy) of the tire's
+    # MaterialParams in tree order; None: the tire file's own
+
+
+def params_leaves(params) -> tuple:
+    """A MaterialParams as plain data for a CaseTask (its leaves as numpy arrays)."""
+    import jax
+    import numpy as np
+
+    return tuple(np.asarray(x) for x in jax.tree_util.tree_leaves(params))
 
 
 @dataclasses.dataclass
@@ -67,6 +77,19 @@ def build(task: CaseTask):
     return exp, make_tire(task.tire)
 
 
+def task_params(task: CaseTask, tire):
+    """The task's MaterialParams (its leaves in the structure of the tire's own), or None."""
+    import jax
+    import jax.numpy as jnp
+
+    if task.params is None:
+        return None
+    tree = jax.tree_util.tree_structure(tire.params)
+    if tree.num_leaves != len(task.params):
+        raise ClusterError(f"a case's parameters have {len(task.params)} leaves, this tire's {tree.num_leaves}")
+    return jax.tree_util.tree_unflatten(tree, [jnp.asarray(x) for x in task.params])
+
+
 def _outcome(task: CaseTask, tire, res) -> Outcome:
     from .batch import CaseFailure
 
@@ -93,11 +116,14 @@ class InProcess:
         for idx in groups(tasks):
             exp, tire = build(tasks[idx[0]])
             keep = tasks[idx[0]].contact_table
+            plist = None
+            if any(tasks[i].params is not None for i in idx):
+                plist = [tire.params if tasks[i].params is None else task_params(tasks[i], tire) for i in idx]
 
             def done(k, res, idx=idx, tire=tire):
                 on_outcome(idx[k], _outcome(tasks[idx[k]], tire, res))
 
-            batch.run(exp, tire, [tasks[i].condition for i in idx], batch=batch_size, on_result=done,
+            batch.run(exp, tire, [tasks[i].condition for i in idx], plist, batch=batch_size, on_result=done,
                       keep_outputs=keep)
 
 
@@ -127,7 +153,9 @@ def run_task(task: CaseTask, driver_version: str, use_cache: bool) -> Outcome:
 
         _WORKER_CACHE.append(cache.enable())
     exp, tire = build(task)
-    [res] = batch.run(exp, tire, [task.condition], batch=1, keep_outputs=task.contact_table)
+    params = task_params(task, tire)
+    [res] = batch.run(exp, tire, [task.condition], None if params is None else [params], batch=1,
+                      keep_outputs=task.contact_table)
     return _outcome(task, tire, res)
 
 

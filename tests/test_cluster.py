@@ -1,11 +1,12 @@
-"""`jtire --cluster SPEC`: the cases of `sweep` and `characterize` on a Dask cluster.
+"""`jtire --cluster SPEC`: the cases of `sweep`, `characterize` and the calibration's evaluations on a Dask cluster.
 
 Without simulation (fast): the spec and the cluster.toml are checked with one line each, the SLURM and
 PBS job scripts are rendered and read (no batch queue here), a task refuses a driver of another build.
 With simulation (slow, in the physics gate), on the coarse ring with the fast suite's programs: a sweep
 on `local:2` writes the same numbers, byte for byte, as the default runner; a worker SIGKILLed mid-case
 has its case rerun elsewhere and written once; a driver SIGKILLed mid-sweep resumes (on the default
-runner: the cluster is no part of a run's settings); a worker of another jtire build is refused.
+runner: the cluster is no part of a run's settings); a worker of another jtire build is refused; an ARSM
+calibration through the shell model gives the default runner's evaluations, tire file and table.
 """
 
 import os
@@ -74,7 +75,7 @@ def test_a_bad_spec_is_one_line(spec, line, capsys, tmp_path):
 def test_jobs_that_do_not_run_on_a_cluster_refuse_it(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("JTIRE_CLUSTER", "local:2")  # the environment's default, as a user would set it
     assert jtire("data", "--out", tmp_path / "d") == 2
-    assert "--cluster local:2: only sweep and characterize run on a cluster" in capsys.readouterr().err
+    assert "--cluster local:2: only sweep, characterize, calibrate, sample run on a cluster" in capsys.readouterr().err
 
 
 def test_an_unreachable_scheduler_is_one_line(capsys, tmp_path):
@@ -304,3 +305,50 @@ def case_files_json(f):
     r = json.loads(Path(f).read_text())
     r["info"].pop("wall_s_per_case_in_batch", None)
     return r
+
+
+SMALL_CALIBRATION = f'''tire_file = "{REPO / "configs" / "tires" / "xone_xda.toml"}"
+method = "arsm"
+[targets.DZ]
+experiment = "vertical_stiffness"
+quantity = "deflection_m"
+condition = {{ load_kg = 4625.0, pressure_psi = 120.0 }}
+table = {{ stated_load_kN = 50.0, max_load_kN = 60.0 }}
+measured_mm = 39.0625
+[targets.DY]
+experiment = "lateral_stiffness"
+quantity = "lateral_deflection_m"
+condition = {{ load_kg = 4625.0, pressure_psi = 120.0 }}
+table = {{ force_kN = 5.0, decay_s = 0.0 }}
+measured_mm = 11.0997
+[[free]]
+name = "parts.mid_sidewall.E_meridional"
+factor = [0.33, 3.0]
+[[free]]
+name = "geometry.crown_radius"
+bounds = [1000.0, 4000.0]
+'''
+
+
+@pytest.mark.slow
+@pytest.mark.gate
+def test_local_cluster_arsm_calibration_matches_the_default_runner(tmp_path):
+    """An ARSM calibration through the shell model (coarse ring, E02 and E09 static, a modulus and the
+    crown radius free: each point its own section), 6 evaluations: on local:2 every evaluation's
+    responses, the calibrated tire file and Table 4-4 are the default runner's, byte for byte."""
+    import json
+
+    cfg = tmp_path / "small.toml"
+    cfg.write_text(SMALL_CALIBRATION)
+    sets = ["--budget", "6", "--set", "tire.mesh.n_theta=32", "--set", "tire.mesh.n_crown=4"]
+    assert jtire("calibrate", cfg, "--out", tmp_path / "a", *sets) == 0
+    assert jtire("--cluster", "local:2", "calibrate", cfg, "--out", tmp_path / "b", *sets) == 0
+
+    def history(d):
+        rows = [json.loads(ln) for ln in (tmp_path / d / "history.jsonl").read_text().splitlines()]
+        return [{k: v for k, v in r.items() if k != "batch_wall_s"} for r in rows]
+
+    a = history("a")
+    assert len(a) == 6 and history("b") == a
+    for f in ("calibrated_tire.toml", "table_4_4.csv"):
+        assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f

@@ -94,6 +94,10 @@ class ShellSimulator(Simulator):
         n_dev = len(jax.devices()) if devices is None else int(devices)
         per_point = max([len(g["targets"]) for g in self.groups if g["exp"].shardable] or [1])
         self.points_per_call = max(1, n_dev // per_point)
+        from ...executor import InProcess, current
+
+        if not isinstance(current(), InProcess):  # a cluster: enough points to give every worker a case
+            self.points_per_call = max(self.points_per_call, -(-current().slots() // len(spec.targets)))
         self.last_wall = {}
         self.jacobian_modes = {}  # experiment name -> "forward" / "reverse" (default: see jacobian)
         # on_case(label, n_done, n_total): called as each case of an evaluation finishes (the CLI
@@ -148,6 +152,12 @@ class ShellSimulator(Simulator):
         if self.on_case is not None:  # the bar appears at 0 of total, before the first case runs
             self.on_case(f"{n} parameter set{'s' * (n > 1)}", 0, total)
 
+        from ...executor import InProcess, current
+
+        if not isinstance(current(), InProcess):  # --cluster: every case of the call is a task there
+            self._evaluate_on(current(), thetas, plist, out, count)
+            return self.space.add_bias(thetas, out, self.response_names)
+
         # rows sharing a section run together on its model (all rows: no free geometry)
         sections = {}
         for i, th in enumerate(thetas):
@@ -194,6 +204,34 @@ class ShellSimulator(Simulator):
             if g["exp"].shardable:
                 run_group(g)
         return self.space.add_bias(thetas, out, self.response_names)  # what the targets measure
+
+    def _evaluate_on(self, ex, thetas, plist, out, count):
+        """evaluate's cases on an executor (a cluster): one task per point and target, as plain data
+        (the section's tire spec, the point's material leaves); the driver fills `out` as they return."""
+        from ...config import parse_solver
+        from ...executor import CaseTask, params_leaves
+
+        solver = parse_solver(self._solver or {})
+        tasks, where = [], []
+        for i, th in enumerate(thetas):
+            spec, leaves = self.tire_at(th).spec, params_leaves(plist[i])
+            for g in self.groups:
+                for j, t in g["targets"]:
+                    tasks.append(CaseTask(t.experiment, t.table, solver, spec, t.condition, params=leaves))
+                    where.append((i, j, t))
+
+        def save(k, outcome):
+            i, j, t = where[k]
+            r = outcome.result
+            if not isinstance(r, batch.CaseFailure):
+                out[i, j] = float(r.quantities[t.quantity])
+            else:
+                self.last_failures.setdefault(i, {})[t.name] = str(r.error)
+            count()
+
+        t0 = time.perf_counter()
+        ex.run(tasks, save)
+        self.last_wall["cluster"] = time.perf_counter() - t0
 
     def jacobian(self, theta, quantities=None):
         """(values (q,), J (q, d)) by autodiff, per experiment in the cheaper mode: forward mode

@@ -30,8 +30,9 @@ SUBCOMMANDS = {
 }
 
 
-# subcommands whose cases go to the executor --cluster names (`jtire.executor`)
-ON_CLUSTER = ("sweep", "characterize")
+# subcommands whose cases go to the executor --cluster names (`jtire.executor`; calibrate and sample: the
+# shell model's evaluations)
+ON_CLUSTER = ("sweep", "characterize", "calibrate", "sample")
 
 
 @contextlib.contextmanager
@@ -44,7 +45,7 @@ def _executor(args):
     from jtire.errors import ConfigError
 
     if args.command not in ON_CLUSTER:
-        raise ConfigError(f"--cluster {args.cluster}: only {' and '.join(ON_CLUSTER)} run on a cluster so far "
+        raise ConfigError(f"--cluster {args.cluster}: only {', '.join(ON_CLUSTER)} run on a cluster so far "
                           f"(unset JTIRE_CLUSTER, or drop --cluster, for {args.command})")
     with executor.connect(args.cluster, args.cluster_config) as ex, executor.using(ex):
         yield ex
@@ -83,7 +84,7 @@ def build_parser():
                         help="do not use the persistent compilation cache (default: on, in the user's cache folder; "
                              "JTIRE_CACHE_DIR sets the folder)")
     parser.add_argument("--cluster", default=os.environ.get("JTIRE_CLUSTER") or None, metavar="SPEC",
-                        help="run the cases of `sweep` and `characterize` on a Dask cluster: local:N (N worker "
+                        help="run the cases of sweep, characterize, calibrate and sample on a Dask cluster: local:N (N worker "
                              "processes here), tcp://HOST:PORT (a running scheduler), slurm or pbs (settings in "
                              "cluster.toml); default: in this process (JTIRE_CLUSTER sets it too). Needs "
                              "pip install 'jtire[cluster]'")
