@@ -352,3 +352,27 @@ def test_local_cluster_arsm_calibration_matches_the_default_runner(tmp_path):
     assert len(a) == 6 and history("b") == a
     for f in ("calibrated_tire.toml", "table_4_4.csv"):
         assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f
+
+
+@pytest.mark.slow
+@pytest.mark.gate
+def test_the_geometry_columns_plain_runs_on_a_cluster_are_the_in_process_ones(tmp_path):
+    """The Jacobian's geometry columns are forward differences of plain runs: on local:2 (all the
+    columns' runs at once) each run's responses are those of the in-process runs, exactly."""
+    import numpy as np
+
+    from jtire.calibration.tire.shell import ShellSimulator
+    from jtire.calibration.tire.spec import load_calibration
+
+    cfg = tmp_path / "small.toml"
+    cfg.write_text(SMALL_CALIBRATION)
+    spec = load_calibration(cfg, ["tire.mesh.n_theta=32", "tire.mesh.n_crown=4"])
+    sim = ShellSimulator(spec, spec.tire)
+    jobs = sim.target_jobs()
+    theta = spec.space.default.copy()
+    points = [theta, theta + np.array([0.0, 1e-3])]
+    here = np.array([sim._values(jobs, th, 2) for th in points])
+    assert np.all(np.isfinite(here)) and not np.array_equal(here[0], here[1])  # the radius moved them
+    with executor.connect("local:2") as ex:
+        there = sim._values_on(ex, jobs, points, 2)
+    np.testing.assert_array_equal(there, here)

@@ -242,8 +242,7 @@ class ShellSimulator(Simulator):
         experiment name ("forward" / "reverse")."""
         theta = np.asarray(theta, float)
         if quantities is None:
-            jobs = [(g["exp"], [t.condition for _, t in g["targets"]], [t.quantity for _, t in g["targets"]],
-                     [j for j, _ in g["targets"]]) for g in self.groups]
+            jobs = self.target_jobs()
             names = list(self.response_names)
         else:
             names = list(quantities)
@@ -252,9 +251,10 @@ class ShellSimulator(Simulator):
                 if q not in SENSITIVITY:
                     raise KeyError(f"{q}: no traced reduction (known: {', '.join(SENSITIVITY)})")
                 ename, over = SENSITIVITY[q]
-                exp = REGISTRY[ename].from_table(_table(ename, over), self.proto, self.tire.spec)
+                table = _table(ename, over)
+                exp = REGISTRY[ename].from_table(table, self.proto, self.tire.spec)
                 cond = RATED if REGISTRY[ename].needs_load else {"pressure_Pa": RATED["pressure_Pa"]}
-                jobs.append((exp, [cond], [q], [k]))
+                jobs.append((exp, table, [cond], [q], [k]))
         extra = 0.0
         if quantities is None and self._forward_wall is None:
             extra = 2.0  # the two reference evaluations are charged to this call
@@ -267,7 +267,7 @@ class ShellSimulator(Simulator):
         J = np.full((len(names), self.space.d), np.nan)
         t0 = time.perf_counter()
         label = f"Jacobian ({self.space.d} parameters; one experiment at a time)"
-        for k, (exp, conds, qs, idx) in enumerate(jobs):
+        for k, (exp, _, conds, qs, idx) in enumerate(jobs):
             if self.on_case is not None:
                 self.on_case(label, k, len(jobs))
             # reverse for fewer quantities than parameters, except through the static solves, whose
@@ -282,13 +282,22 @@ class ShellSimulator(Simulator):
             J[idx] = jac
         # geometry columns (the traced ones are 0: the model is held fixed): forward differences of
         # plain runs on both sides (the host reductions, not mixed with the traced ones)
-        v0 = self._values(jobs, theta, len(names)) if self.space.geometry_indices else None
-        for i in self.space.geometry_indices:
+        geo = list(self.space.geometry_indices)
+        points = [theta] + [theta + FD_STEP * np.eye(len(theta))[i] for i in geo]
+        from ...executor import InProcess, current
+
+        if geo and not isinstance(current(), InProcess):  # --cluster: every column's runs at once
             t1 = time.perf_counter()
-            th = theta.copy()
-            th[i] += FD_STEP
-            J[:, i] = (self._values(jobs, th, len(names)) - v0) / FD_STEP
-            self.last_wall[f"jacobian {self.space.names[i]} (forward difference)"] = time.perf_counter() - t1
+            v = self._values_on(current(), jobs, points, len(names))
+            for c, i in enumerate(geo):
+                J[:, i] = (v[c + 1] - v[0]) / FD_STEP
+            self.last_wall["jacobian geometry columns (forward differences, cluster)"] = time.perf_counter() - t1
+        elif geo:
+            v0 = self._values(jobs, theta, len(names))
+            for c, i in enumerate(geo):
+                t1 = time.perf_counter()
+                J[:, i] = (self._values(jobs, points[c + 1], len(names)) - v0) / FD_STEP
+                self.last_wall[f"jacobian {self.space.names[i]} (forward difference)"] = time.perf_counter() - t1
         if self.on_case is not None:
             self.on_case(label, len(jobs), len(jobs))
         self.last_wall["jacobian"] = time.perf_counter() - t0
@@ -298,15 +307,44 @@ class ShellSimulator(Simulator):
             values, J = self.space.add_bias_jacobian(theta, values, J, self.response_names)
         return values, J
 
+    def target_jobs(self) -> list:
+        """The targets as (experiment, table, conditions, quantities, response indices), one per group."""
+        return [(g["exp"], g["targets"][0][1].table, [t.condition for _, t in g["targets"]],
+                 [t.quantity for _, t in g["targets"]], [j for j, _ in g["targets"]]) for g in self.groups]
+
     def _values(self, jobs, theta, n):
         """The jobs' quantities (n,) at theta by plain runs (a failed case: nan)."""
         out = np.full(n, np.nan)
         tire, p = self.tire_at(theta), self.params(theta)
-        for exp, conds, qs, idx in jobs:
+        for exp, _, conds, qs, idx in jobs:
             res = batch.run(exp, tire, conds, params_list=[p] * len(conds), devices=self.devices)
             for r, q, k in zip(res, qs, idx):
                 if not isinstance(r, batch.CaseFailure):
                     out[k] = float(r.quantities[q])
+        return out
+
+
+    def _values_on(self, ex, jobs, points, n):
+        """_values at each of `points` (rows of the result), every case a task on the executor."""
+        from ...config import parse_solver
+        from ...executor import CaseTask, params_leaves
+
+        solver = parse_solver(self._solver or {})
+        out = np.full((len(points), n), np.nan)
+        tasks, where = [], []
+        for r, th in enumerate(points):
+            spec, leaves = self.tire_at(th).spec, params_leaves(self.params(th))
+            for exp, table, conds, qs, idx in jobs:
+                for c, q, k in zip(conds, qs, idx):
+                    tasks.append(CaseTask(exp.name, table, solver, spec, c, params=leaves))
+                    where.append((r, q, k))
+
+        def save(m, outcome):
+            r, q, k = where[m]
+            if not isinstance(outcome.result, batch.CaseFailure):
+                out[r, k] = float(outcome.result.quantities[q])
+
+        ex.run(tasks, save)
         return out
 
 
