@@ -1,12 +1,14 @@
 """`jtire --cluster SPEC`: the cases of `sweep`, `characterize` and the calibration's evaluations on a Dask cluster.
 
-Without simulation (fast): the spec and the cluster.toml are checked with one line each, the SLURM and
-PBS job scripts are rendered and read (no batch queue here), a task refuses a driver of another build.
-With simulation (slow, in the physics gate), on the coarse ring with the fast suite's programs: a sweep
-on `local:2` writes the same numbers, byte for byte, as the default runner; a worker SIGKILLed mid-case
-has its case rerun elsewhere and written once; a driver SIGKILLed mid-sweep resumes (on the default
-runner: the cluster is no part of a run's settings); a worker of another jtire build is refused; an ARSM
-calibration through the shell model gives the default runner's evaluations, tire file and table.
+Fast (no simulation): the spec and the cluster.toml are checked with one line each, the SLURM and PBS
+job scripts are rendered and read (no batch queue here), a task refuses a driver of another build, and
+a worker of another jtire build joining a scheduler is refused before anything runs.
+In the physics gate (coarse ring, the fast suite's programs): a sweep on `local:2` writes the same
+numbers, byte for byte, as the default runner; a worker SIGKILLed mid-case has its case rerun elsewhere
+and written once; a driver SIGKILLed mid-sweep resumes (on the default runner: the cluster is no part of
+a run's settings).
+Slow only (CI's time): a characterization, an ARSM calibration and its posterior check, and the
+Jacobian's geometry columns on `local:2` give the default runner's files and numbers.
 """
 
 import os
@@ -248,8 +250,6 @@ def test_a_killed_driver_resumes_with_nothing_lost(default_sweeps, tmp_path):
     assert case_files(out) == case_files(default_sweeps / "transient")
 
 
-@pytest.mark.slow
-@pytest.mark.gate
 def test_a_worker_of_another_build_is_refused(tmp_path, capsys):
     """A worker importing a copy of jtire with one edited file (another build) joins a scheduler: the
     driver refuses the cluster with one line before anything runs."""
@@ -279,7 +279,6 @@ def test_a_worker_of_another_build_is_refused(tmp_path, capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.gate
 def test_local_cluster_characterization_matches_the_default_runner(tmp_path):
     """`jtire characterize` with every case submitted at once to local:2: the case files, the tables
     and the `.tir` are the default runner's, byte for byte (wall times aside). Static, transient and
@@ -307,19 +306,19 @@ def case_files_json(f):
     return r
 
 
-SMALL_CALIBRATION = f'''tire_file = "{REPO / "configs" / "tires" / "xone_xda.toml"}"
+SMALL_CALIBRATION = '''tire_file = "coarse_tire.toml"
 method = "arsm"
 [targets.DZ]
 experiment = "vertical_stiffness"
 quantity = "deflection_m"
-condition = {{ load_kg = 4625.0, pressure_psi = 120.0 }}
-table = {{ stated_load_kN = 50.0, max_load_kN = 60.0 }}
+condition = { load_kg = 4625.0, pressure_psi = 120.0 }
+table = { stated_load_kN = 50.0, max_load_kN = 60.0 }
 measured_mm = 39.0625
 [targets.DY]
 experiment = "lateral_stiffness"
 quantity = "lateral_deflection_m"
-condition = {{ load_kg = 4625.0, pressure_psi = 120.0 }}
-table = {{ force_kN = 5.0, decay_s = 0.0 }}
+condition = { load_kg = 4625.0, pressure_psi = 120.0 }
+table = { force_kN = 5.0, decay_s = 0.0 }
 measured_mm = 11.0997
 [[free]]
 name = "parts.mid_sidewall.E_meridional"
@@ -328,34 +327,72 @@ factor = [0.33, 3.0]
 name = "geometry.crown_radius"
 bounds = [1000.0, 4000.0]
 '''
+# a posterior over it: 6 runs train a linear emulator; 4 check draws through the shell model
+SMALL_POSTERIOR = '''calibration = "small.toml"
+history = "a"
+[uncertainty.DZ]
+relative = 0.03
+why = "test"
+[uncertainty.DY]
+relative = 0.05
+why = "test"
+[emulator]
+candidates = ["linear", "reduced"]
+seed = 0
+[sampler]
+walkers = 8
+max_steps = 1000
+check_every = 100
+n_tau = 50
+seed = 0
+[check]
+draws = 4
+seed = 0
+refine = false
+'''
+
+
+def small_calibration(folder):
+    """small.toml, posterior.toml and the coarse ring's tire file (32 segments, 4 crown elements) in folder."""
+    tire = (REPO / "configs" / "tires" / "xone_xda.toml").read_text()
+    coarse = tire.replace("\nn_theta = 64 ", "\nn_theta = 32 ").replace("\nn_crown = 6 ", "\nn_crown = 4 ")
+    assert coarse.count("= 32 ") == 1 and "\nn_crown = 4 " in coarse
+    (folder / "coarse_tire.toml").write_text(coarse)
+    (folder / "small.toml").write_text(SMALL_CALIBRATION)
+    (folder / "posterior.toml").write_text(SMALL_POSTERIOR)
+    return folder / "small.toml"
 
 
 @pytest.mark.slow
-@pytest.mark.gate
-def test_local_cluster_arsm_calibration_matches_the_default_runner(tmp_path):
+def test_local_cluster_arsm_calibration_matches_the_default_runner(tmp_path, monkeypatch):
     """An ARSM calibration through the shell model (coarse ring, E02 and E09 static, a modulus and the
     crown radius free: each point its own section), 6 evaluations: on local:2 every evaluation's
-    responses, the calibrated tire file and Table 4-4 are the default runner's, byte for byte."""
+    responses, the calibrated tire file and Table 4-4 are the default runner's, byte for byte. Then
+    the posterior check (`sample --check`, 4 draws through the shell model) on that calibration: the
+    same simulated draws and coverage on local:2 as in this process."""
     import json
 
-    cfg = tmp_path / "small.toml"
-    cfg.write_text(SMALL_CALIBRATION)
-    sets = ["--budget", "6", "--set", "tire.mesh.n_theta=32", "--set", "tire.mesh.n_crown=4"]
-    assert jtire("calibrate", cfg, "--out", tmp_path / "a", *sets) == 0
-    assert jtire("--cluster", "local:2", "calibrate", cfg, "--out", tmp_path / "b", *sets) == 0
+    monkeypatch.chdir(tmp_path)
+    cfg = small_calibration(tmp_path)
+    assert jtire("calibrate", cfg, "--out", "a", "--budget", "6") == 0
+    assert jtire("--cluster", "local:2", "calibrate", cfg, "--out", "b", "--budget", "6") == 0
 
-    def history(d):
-        rows = [json.loads(ln) for ln in (tmp_path / d / "history.jsonl").read_text().splitlines()]
-        return [{k: v for k, v in r.items() if k != "batch_wall_s"} for r in rows]
+    def jsonl(f, drop=("batch_wall_s",)):
+        rows = [json.loads(ln) for ln in (tmp_path / f).read_text().splitlines()]
+        return [{k: v for k, v in r.items() if k not in drop} for r in rows]
 
-    a = history("a")
-    assert len(a) == 6 and history("b") == a
+    a = jsonl("a/history.jsonl")
+    assert len(a) == 6 and jsonl("b/history.jsonl") == a
     for f in ("calibrated_tire.toml", "table_4_4.csv"):
         assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f
+    assert jtire("sample", "posterior.toml", "--out", "s_a", "--check") == 0
+    assert jtire("--cluster", "local:2", "sample", "posterior.toml", "--out", "s_b", "--check") == 0
+    runs = jsonl("s_a/check_runs.jsonl", drop=())
+    assert len(runs) == 4 and jsonl("s_b/check_runs.jsonl", drop=()) == runs
+    assert (tmp_path / "s_a" / "check.json").read_bytes() == (tmp_path / "s_b" / "check.json").read_bytes()
 
 
 @pytest.mark.slow
-@pytest.mark.gate
 def test_the_geometry_columns_plain_runs_on_a_cluster_are_the_in_process_ones(tmp_path):
     """The Jacobian's geometry columns are forward differences of plain runs: on local:2 (all the
     columns' runs at once) each run's responses are those of the in-process runs, exactly."""
@@ -364,9 +401,7 @@ def test_the_geometry_columns_plain_runs_on_a_cluster_are_the_in_process_ones(tm
     from jtire.calibration.tire.shell import ShellSimulator
     from jtire.calibration.tire.spec import load_calibration
 
-    cfg = tmp_path / "small.toml"
-    cfg.write_text(SMALL_CALIBRATION)
-    spec = load_calibration(cfg, ["tire.mesh.n_theta=32", "tire.mesh.n_crown=4"])
+    spec = load_calibration(small_calibration(tmp_path))
     sim = ShellSimulator(spec, spec.tire)
     jobs = sim.target_jobs()
     theta = spec.space.default.copy()
