@@ -279,7 +279,7 @@ def connect(spec: str, config_file=None):
         from distributed import Client, LocalCluster
     except ImportError:
         raise ClusterError(f"--cluster {spec}: needs the cluster extras: pip install 'jtire[cluster]'") from None
-    cluster = None
+    cluster = client = None
     try:
         if kind == "local":
             # fresh worker processes (spawned, never forked: JAX is not fork-safe), one thread each;
@@ -310,8 +310,9 @@ def connect(spec: str, config_file=None):
         handshake(client)
         yield DaskExecutor(client, where)
     finally:
-        with contextlib.suppress(Exception):
-            client.close()
+        if client is not None:
+            with contextlib.suppress(Exception):
+                client.close()
         if cluster is not None:
             with contextlib.suppress(Exception):
                 cluster.close()

@@ -301,7 +301,8 @@ def test_characterize(user_dir, capsys):
 def test_cluster_commands(user_dir, capsys, e01_grid):
     """The README's cluster commands on two local Dask workers: the 2 x 2 grid (static E01) with the
     numbers of the same sweep in this process, and a characterization at one condition (E01 and E02,
-    no validation). The cluster's own checks (kills, other builds, byte for byte): tests/test_cluster.py."""
+    no validation). The cluster's own checks (kills, other builds, byte for byte): tests/test_cluster.py
+    and tests/test_cluster_runs.py."""
     pytest.importorskip("distributed", reason="the cluster extras: pip install -e '.[cluster]'")
     assert jtire("jtire --cluster local:2 sweep configs/experiments/footprint.toml --out runs/grid", *QUICK_SIM,
                  *GRID_2X2) == 0

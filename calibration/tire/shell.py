@@ -137,7 +137,6 @@ class ShellSimulator(Simulator):
         thetas = np.atleast_2d(np.asarray(thetas, float))
         n = len(thetas)
         out = np.full((n, len(self.response_names)), np.nan)
-        plist = [self.params(th) for th in thetas]
         self.last_failures = {}  # row -> {target: error message} of this call's failed cases
         total = n * sum(len(g["targets"]) for g in self.groups)
         done = [0]
@@ -155,8 +154,12 @@ class ShellSimulator(Simulator):
         from ...executor import InProcess, current
 
         if not isinstance(current(), InProcess):  # --cluster: every case of the call is a task there
-            self._evaluate_on(current(), thetas, plist, out, count)
+            t0 = time.perf_counter()
+            out = self._values_on(current(), self.target_jobs(), thetas, self.response_names, count,
+                                  self.last_failures)
+            self.last_wall["cluster"] = time.perf_counter() - t0
             return self.space.add_bias(thetas, out, self.response_names)
+        plist = [self.params(th) for th in thetas]
 
         # rows sharing a section run together on its model (all rows: no free geometry)
         sections = {}
@@ -204,34 +207,6 @@ class ShellSimulator(Simulator):
             if g["exp"].shardable:
                 run_group(g)
         return self.space.add_bias(thetas, out, self.response_names)  # what the targets measure
-
-    def _evaluate_on(self, ex, thetas, plist, out, count):
-        """evaluate's cases on an executor (a cluster): one task per point and target, as plain data
-        (the section's tire spec, the point's material leaves); the driver fills `out` as they return."""
-        from ...config import parse_solver
-        from ...executor import CaseTask, params_leaves
-
-        solver = parse_solver(self._solver or {})
-        tasks, where = [], []
-        for i, th in enumerate(thetas):
-            spec, leaves = self.tire_at(th).spec, params_leaves(plist[i])
-            for g in self.groups:
-                for j, t in g["targets"]:
-                    tasks.append(CaseTask(t.experiment, t.table, solver, spec, t.condition, params=leaves))
-                    where.append((i, j, t))
-
-        def save(k, outcome):
-            i, j, t = where[k]
-            r = outcome.result
-            if not isinstance(r, batch.CaseFailure):
-                out[i, j] = float(r.quantities[t.quantity])
-            else:
-                self.last_failures.setdefault(i, {})[t.name] = str(r.error)
-            count()
-
-        t0 = time.perf_counter()
-        ex.run(tasks, save)
-        self.last_wall["cluster"] = time.perf_counter() - t0
 
     def jacobian(self, theta, quantities=None):
         """(values (q,), J (q, d)) by autodiff, per experiment in the cheaper mode: forward mode
@@ -288,7 +263,7 @@ class ShellSimulator(Simulator):
 
         if geo and not isinstance(current(), InProcess):  # --cluster: every column's runs at once
             t1 = time.perf_counter()
-            v = self._values_on(current(), jobs, points, len(names))
+            v = self._values_on(current(), jobs, points, names)
             for c, i in enumerate(geo):
                 J[:, i] = (v[c + 1] - v[0]) / FD_STEP
             self.last_wall["jacobian geometry columns (forward differences, cluster)"] = time.perf_counter() - t1
@@ -324,13 +299,15 @@ class ShellSimulator(Simulator):
         return out
 
 
-    def _values_on(self, ex, jobs, points, n):
-        """_values at each of `points` (rows of the result), every case a task on the executor."""
+    def _values_on(self, ex, jobs, points, names, on_case=None, failures=None):
+        """The jobs' quantities (len(points), len(names)) at each point, every case a task on the executor
+        (a cluster): the point's section and material leaves as plain data; a failed case stays nan
+        (and goes into failures[row][names[k]] when given)."""
         from ...config import parse_solver
         from ...executor import CaseTask, params_leaves
 
         solver = parse_solver(self._solver or {})
-        out = np.full((len(points), n), np.nan)
+        out = np.full((len(points), len(names)), np.nan)
         tasks, where = [], []
         for r, th in enumerate(points):
             spec, leaves = self.tire_at(th).spec, params_leaves(self.params(th))
@@ -343,6 +320,10 @@ class ShellSimulator(Simulator):
             r, q, k = where[m]
             if not isinstance(outcome.result, batch.CaseFailure):
                 out[r, k] = float(outcome.result.quantities[q])
+            elif failures is not None:
+                failures.setdefault(r, {})[names[k]] = str(outcome.result.error)
+            if on_case is not None:
+                on_case()
 
         ex.run(tasks, save)
         return out
