@@ -63,6 +63,9 @@ TIRE_SCHEMA = {
     "viscoelastic": {"relaxation_times_ms": Field(list, U.MS, 1e-3, 1e4, unit="ms")},
     # the study's explicit-code model form, not tire physics (optional table; 0 = off)
     "model_form": {"nodal_damping_per_s": Field(float, 1, 0, 100, 0.0, "1/s")},
+    # the load index's load at its reference pressure (`jtire new-tire`); a label, never used by the physics
+    "rated": {"load_index": Field(int, 1, 0, 300, 0), "load_kg": Field(float, 1, 0, 1e5, 0.0, "kg"),
+              "pressure_kPa": Field(float, 1, 0, 2000, 0.0, "kPa")},
     "reference": {  # measured values reported beside the simulated ones; never used by the physics
         "belt_Iy_kgm2": Field(float, 1, 0, 1e4, 0.0), "belt_Ix_kgm2": Field(float, 1, 0, 1e4, 0.0),
         "footprint_length_mm": mm(0, 5000, 0.0), "footprint_width_mm": mm(0, 5000, 0.0),

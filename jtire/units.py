@@ -6,6 +6,7 @@ LBF = 4.4482216152605  # N
 MPH = 0.44704  # m/s
 KMH = 1.0 / 3.6  # m/s
 MM = 1e-3
+INCH = 0.0254  # m
 MPA = 1e6
 KN = 1e3
 MS = 1e-3  # millisecond

@@ -32,7 +32,8 @@ CASES = SIMULATION_CASES + CALIBRATION_CASES
 def test_the_table_is_large_and_covers_every_subcommand():
     assert len(CASES) >= 60
     assert len({c.name for c in CASES}) == len(CASES), "two cases share a name"
-    names = {"-".join(c.name.split("-")[:2]) if c.name.startswith("export-") else c.name.split("-")[0] for c in CASES}
+    names = {"-".join(c.name.split("-")[:2]) if c.name.startswith(("export-", "new-")) else c.name.split("-")[0]
+             for c in CASES}
     for sub in SUBCOMMANDS:
         assert sub in names, f"no bad-input case for `jtire {sub}`"
 

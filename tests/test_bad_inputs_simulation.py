@@ -105,6 +105,12 @@ CASES = [
          "--longvl nan: must be a speed"),
     Case("export-tir-fittyp-choice", lambda t: ["export-tir", _w(t, "c.json", "{}"), "--fittyp", "52"],
          "argument --fittyp: invalid choice"),
+    # ---- new-tire (more in tests/test_new_tire.py) -------------------------------------------------------
+    Case("new-tire-not-a-size", lambda t: ["new-tire", "12.00R20", "--out", str(Path(t) / "x")], "size '12.00R20'"),
+    Case("new-tire-measured-missing", lambda t: ["new-tire", "205/55R16", "--measured", str(Path(t) / "m.csv"),
+                                                  "--out", str(Path(t) / "x")], "m.csv: no such measurements CSV"),
+    Case("new-tire-measured-columns", lambda t: ["new-tire", "205/55R16", "--measured", _w(t, "m.csv", "a,b\n1,2\n"),
+                                                  "--out", str(Path(t) / "x")], "m.csv: needs the columns"),
     # ---- export-vtk and run --frames ------------------------------------------------------------------
     Case("export-vtk-missing", lambda t: ["export-vtk", str(Path(t) / "nofolder")], "nofolder", "no such frames file"),
     Case("export-vtk-not-npz", lambda t: ["export-vtk", _w(t, "f.npz", b"not a zip file")], "f.npz",

@@ -60,6 +60,11 @@ COVERED = {
     r"jtire calibrate configs/calibration/(study_footprint|study_replication|track)\.toml --out runs/calibrate/\w+":
         "test_calibrate_other_configs",
     r"jtire export-tir( \S+)*": "test_export_tir",
+    r"jtire new-tire( 295/75R22\.5( --measured configs/data/measurements_example\.csv --force)?)?": "test_new_tire_commands",
+    r"jtire run tires/295_75R22\.5/run\.toml": "test_new_tire_commands",
+    r"jtire calibrate tires/295_75R22\.5/calibrate\.toml --out runs/calibrate_295_75R22\.5": "test_new_tire_commands",
+    r"jtire characterize tires/295_75R22\.5/characterize\.toml --tire runs/calibrate_295_75R22\.5/calibrated_tire\.toml "
+    r"--out runs/characterize_295_75R22\.5": "test_new_tire_commands",
     r"python paper_figures/(fig\w+)\.py": "test_figure_scripts",
     r"python paper_figures/fig[56]_\w+\.py --from runs/characterize": "test_characterize",
 }
@@ -125,6 +130,27 @@ def jtire(command: str, *extra) -> int:
 
 
 # ---- running experiments ----------------------------------------------------------------------------
+def test_new_tire_commands(user_dir, capsys):
+    """docs/new-tire.md's commands: a 295/75R22.5 from its designation, its run config on the coarse ring (E01,
+    E02, E09, E12 converged), then the three commands with measurements: calibrate (the closed-form stand-in
+    with a small budget: a dry run of the machinery; the shell model's calibration has its own tests) and
+    characterize the calibrated tire with the generated config (E01 and E02 at the rated condition)."""
+    assert jtire("jtire new-tire 295/75R22.5") == 0
+    assert jtire("jtire run tires/295_75R22.5/run.toml", *QUICK_SIM) == 0
+    out = capsys.readouterr().out
+    assert "footprint: pressure 758.4 kPa, load 27.468 kN" in out
+    verdicts = [ln.split()[:2] for ln in out.splitlines() if ln.split()[:1] == ["converged"]]
+    assert verdicts == [["converged", "True"]] * 4
+    assert jtire("jtire new-tire 295/75R22.5 --measured configs/data/measurements_example.csv --force") == 0
+    assert (user_dir / "tires" / "295_75R22.5" / "calibrate.toml").is_file()
+    assert jtire("jtire calibrate tires/295_75R22.5/calibrate.toml --out runs/calibrate_295_75R22.5", "--standin",
+                 "--budget", "28") == 0
+    small = ["--set", "grid.loads_kg=[2800.0]", "--set", "grid.pressures_psi=[110.0]", "--set",
+             'experiments=["footprint", "vertical_stiffness"]', "--no-validate", *QUICK_SIM]
+    assert jtire("jtire characterize tires/295_75R22.5/characterize.toml --tire "
+                 "runs/calibrate_295_75R22.5/calibrated_tire.toml --out runs/characterize_295_75R22.5", *small) == 0
+    assert (user_dir / "runs" / "characterize_295_75R22.5" / "tire.tir").is_file()
+
 def test_default_run(user_dir, capsys, e01_grid, e09_static):
     """`jtire run`: E01, E02 and E09 at the rated condition, a table printed for each; all three
     static equilibria, and E09's k_l the in-process static run's (same program, same case)."""

@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .simulator import Simulator
+from ...errors import ConfigError
 
 __all__ = ["StandinSimulator", "REFERENCE"]
 
@@ -94,6 +95,11 @@ def footprint(params, load_n, geo=None):
     return jnp.sqrt(2.0 * 0.5095 * delta - delta**2), 0.30 + 2.0 * delta
 
 
+STANDIN_RESPONSES = (("footprint", "contact_length_m"), ("footprint", "contact_width_m"),
+                     ("vertical_stiffness", "deflection_m"), ("lateral_stiffness", "lateral_deflection_m"),
+                     ("rolling_resistance", "rolling_resistance_N"))
+
+
 def _response(params, target, geo=None):
     exp, q, cond, table = target.experiment, target.quantity, target.condition, target.table
     if exp == "footprint" and q in ("contact_length_m", "contact_width_m"):
@@ -119,6 +125,10 @@ class StandinSimulator(Simulator):
 
     def __init__(self, space, base_params, targets, fail=None, jacobian_cost=None):
         self.space, self.base, self.targets = space, base_params, tuple(targets)
+        for t in self.targets:  # refuse a target it has no formula for before anything runs
+            if (t.experiment, t.quantity) not in STANDIN_RESPONSES:
+                raise ConfigError(f"targets.{t.name}: the stand-in has no {t.experiment}.{t.quantity} (it has "
+                                  f"{', '.join('.'.join(r) for r in STANDIN_RESPONSES)}); drop --standin")
         self.response_names = tuple(t.name for t in self.targets)
         self.fail = fail
         self.cost_forward_equivalents = {
