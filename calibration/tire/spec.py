@@ -16,6 +16,9 @@ Layout (every field checked; a bad one is a ConfigError naming it, one line):
     [gradient] max_iterations, forward_budget, lambda0, tol_percent, min_step
     [sensitivity] quantities = [...]         # default: the target responses
     [anchor.NAME] simulated = ..., error_percent = ...   # the study's Table 4-4, shown beside ours
+    extends = "study.toml"                   # optional: another config's fields, this file's on top
+    tire_overrides = ["mesh.n_theta=32"]     # optional: set on the tire file, as --set tire.mesh.n_theta=32
+    free_only = ["tread.G", ...]             # optional: keep only these of the [[free]] entries
 
 `--set` overrides apply to this file; `--set tire.<table>.<key>=...` to the tire file.
 """
@@ -112,22 +115,59 @@ def _is_num(v):
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def _with_base(path: Path) -> dict:
+    """A calibration config with its `extends = "BASE.toml"` merged in (one level): the base's fields, each table
+    updated key by key with this file's, every other field (a list such as `free`, a value) replaced; the base's
+    tire_file stays relative to the base."""
+    raw = load_toml(path)
+    if "extends" not in raw:
+        return raw
+    name = raw.pop("extends")
+    if not isinstance(name, str):
+        raise ConfigError("extends: must be the path of a calibration config, relative to this file")
+    base_path = (path.parent / name).resolve()
+    base = load_toml(base_path)
+    if "extends" in base:
+        raise ConfigError(f"extends = {name!r}: that config extends another; one level only")
+    if isinstance(base.get("tire_file"), str):
+        base["tire_file"] = str((base_path.parent / base["tire_file"]).resolve())
+    for key, value in raw.items():
+        both = isinstance(value, dict) and isinstance(base.get(key), dict)
+        base[key] = {**base[key], **value} if both else value
+    return base
+
+
+def _string_list(value, field: str) -> list:
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise ConfigError(f"{field}: must be a list of strings")
+    return list(value)
+
+
 def load_calibration(path, overrides=(), data_dir=None, tire_path=None) -> CalibrationSpec:
     """Read and validate a calibration config (+ `--set` overrides). tire_path: a tire TOML to use
     instead of the config's tire_file (e.g. a calibrated tire to check against the targets)."""
     from ...tire import params_from_spec
 
     path = Path(path)
-    raw = load_toml(path)
+    raw = _with_base(path)
     overrides = list(overrides or ())
     apply_overrides(raw, [o for o in overrides if not o.startswith("tire.")])
+    tire_overrides = _string_list(raw.pop("tire_overrides", []), "tire_overrides")
+    only = raw.pop("free_only", None)
+    if only is not None:
+        only = _string_list(only, "free_only")
+        known = [f.get("name") for f in raw.get("free", []) if isinstance(f, dict)]
+        for name in only:
+            if name not in known:
+                raise ConfigError(f"free_only: {name!r} is not a free parameter of the config (known: {', '.join(known)})")
+        raw["free"] = [f for f in raw.get("free", []) if isinstance(f, dict) and f.get("name") in only]
     for key in raw:
         if key not in TOP_KEYS:
             raise ConfigError(f"{key}: unknown field (allowed: {', '.join(sorted(TOP_KEYS))})")
     if not isinstance(raw.get("tire_file"), str):
         raise ConfigError("tire_file: missing (path of the tire TOML, relative to this config)")
     tire_path = Path(tire_path).resolve() if tire_path is not None else (path.parent / raw["tire_file"]).resolve()
-    tire_raw, tire = read_tire_file(tire_path, [o[5:] for o in overrides if o.startswith("tire.")])
+    tire_raw, tire = read_tire_file(tire_path, tire_overrides + [o[5:] for o in overrides if o.startswith("tire.")])
     base = params_from_spec(tire)
     method = raw.get("method", "arsm")
     if method not in METHODS:

@@ -1,5 +1,5 @@
-"""The `jtire` command line: `jtire run | sweep | compete | data | calibrate | sample | sensitivity | new-tire |
-export-vtk`.
+"""The `jtire` command line: `jtire run | sweep | compete | data | calibrate | sample | sensitivity | reproduce |
+new-tire | export-vtk`.
 
 One module per subcommand in this package (`jtire.cli.run`, ...); this file only wires them together, and
 turns every expected failure (a bad config, an unstable simulation) into one line on stderr and a
@@ -27,6 +27,8 @@ SUBCOMMANDS = {
     "calibrate": ("jtire.cli.calibrate", "tune the tire's parameters to the calibration targets (ARSM or Levenberg-Marquardt)"),
     "sample": ("jtire.cli.sample", "posterior of the calibrated parameters (emcee on an emulator of the targets)"),
     "sensitivity": ("jtire.cli.sensitivity", "d(quantity)/d(log parameter) table, heat map and identifiable directions"),
+    "reproduce": ("jtire.cli.reproduce", "the whole study in one command: data, competition, calibration, characterization, "
+                                         "posterior, figures and one report (--quick: the same chain small)"),
     "new-tire": ("jtire.cli.new_tire", "a tire file (and run and characterization configs) from a size, e.g. 295/75R22.5"),
     "export-vtk": ("jtire.cli.export_vtk", "a run's recorded frames as ParaView .vtu files and a .pvd time series"),
 }
