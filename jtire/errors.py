@@ -20,3 +20,12 @@ class SimulationError(JtireError, RuntimeError):
 class ClusterError(JtireError, RuntimeError):
     """The cluster named by --cluster cannot be used (unreachable, another jtire build, a case that killed
     its workers); the message says which and what to do."""
+
+
+class CasesFailed(SimulationError):
+    """A long job finished its other cases and wrote its outputs, but some cases failed (each named in the
+    message; a rerun retries them)."""
+
+    def __init__(self, failures):
+        self.failures = list(failures)
+        super().__init__(f"{len(self.failures)} cases failed (rerun to retry them): " + "; ".join(self.failures))

@@ -88,3 +88,32 @@ def test_failed_stage_names_itself(tmp_path, monkeypatch, capsys, two_stages):
     assert err.startswith("jtire reproduce: error: stage compete: competition.budget = 0")
     man = json.loads((tmp_path / "s" / "reproduce.json").read_text())
     assert man["stages"]["compete"]["status"] == "failed"
+
+
+def test_failed_cases_do_not_stop_the_chain(tmp_path, monkeypatch, capsys, two_stages):
+    """A stage that wrote its outputs but lost some cases (the characterization's CasesFailed) lets the chain go
+    on; the report names the failed cases, the exit status is 1, and a rerun runs that stage again (its command
+    retries just those cases), the finished ones not."""
+    import jtire.cli.compete as compete
+    from jtire.errors import CasesFailed
+
+    real, calls = compete.run_cli, []
+
+    def lossy(args, say):
+        calls.append(1)
+        real(args, say)
+        if len(calls) == 1:
+            raise CasesFailed(["soil/seed 3: diverged"])
+        return 0
+
+    monkeypatch.setattr(compete, "run_cli", lossy)
+    out = tmp_path / "study"
+    assert main(["reproduce", "--quick", "--out", str(out)]) == 1
+    man = json.loads((out / "reproduce.json").read_text())
+    assert man["stages"]["compete"]["status"] == "done, 1 cases failed"
+    assert man["stages"]["compete"]["failures"] == ["soil/seed 3: diverged"]
+    assert "compete: done, 1 cases failed" in capsys.readouterr().err
+    assert "| compete |" in (out / "report.md").read_text()
+    data_mtime = (out / "data" / "fits.csv").stat().st_mtime_ns
+    assert main(["reproduce", "--quick", "--out", str(out)]) == 0 and len(calls) == 2
+    assert (out / "data" / "fits.csv").stat().st_mtime_ns == data_mtime

@@ -27,7 +27,7 @@ def run_cli(args, say) -> int:
     from tqdm import tqdm
 
     from .. import characterize as ch
-    from ..errors import ConfigError, SimulationError
+    from ..errors import CasesFailed, ConfigError
     from ..resources import config_path
     from ..rigid_ring.export import export
     from ..rigid_ring.table import write_characterization
@@ -70,7 +70,7 @@ def run_cli(args, say) -> int:
     say(f"wrote {out / 'characterization.json'}, {', '.join(p.name for p in written)} in {out} "
         f"({walls['total_s']:.0f} s)")
     if failures:
-        raise SimulationError(f"{len(failures)} cases failed (rerun to retry them): " + "; ".join(failures))
+        raise CasesFailed(failures)
     return 0
 
 
