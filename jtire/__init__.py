@@ -12,7 +12,7 @@ import os as _os
 # caught in-band by jtire anyway (non-finite states are "unstable", with where and when).
 _os.environ.setdefault("EQX_ON_ERROR", "nan")
 # One BLAS thread unless the user set one: the static solves' host LAPACK calls are small, and threaded
-# OpenBLAS spins against XLA's threads (a 180 x 180 LU: 64 ms instead of 1 ms on 2 cores); and the
+# OpenBLAS spins against XLA's threads, making them far slower (docs/design-notes.md); and the
 # rounding then does not depend on the core count (a cluster's workers give this process's numbers).
 # It only takes effect when numpy is not imported yet (importing jtire first).
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):

@@ -51,8 +51,8 @@ def simulate_batch(exp, model, params, cases: Case, *, params_batched: bool = Fa
 def _case_by_case(exp, model, params, cases: Case, params_batched: bool, device: int = 0):
     """The cases of a batch one after another, unbatched (the static solves): under vmap a Newton
     loop's conditional steps (refactorize or not, GMRES restarts) become selects that run both
-    branches, so a vmapped solve costs 4x an unbatched one even for one case (measured: E02 on the
-    default mesh, 13.3 s vmapped vs 3.2 s). One compiled program serves any batch size."""
+    branches, so a vmapped solve costs several times an unbatched one even for one case
+    (docs/design-notes.md). One compiled program serves any batch size."""
     n = jax.tree_util.tree_leaves(cases)[0].shape[0]
     with jax.default_device(jax.devices()[device]):
         outs = [jax.device_get(exp.simulate(model, _index(params, i) if params_batched else params, _index(cases, i)))
@@ -197,8 +197,8 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
         return results
     # Batches of one case (static solves always), several of them, several devices: the cases run side
     # by side, one per device at a time (threads; JAX releases the GIL while a program runs), and are
-    # reduced and handed to on_result here, in this thread, as each finishes. Measured on the default
-    # mesh, 2 cores: E02 and E09 at one condition each, 3.3 + 3.2 s one after the other, 5.0 s side by side.
+    # reduced and handed to on_result here, in this thread, as each finishes: faster than one after the
+    # other (docs/design-notes.md).
     import queue
     from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 

@@ -65,12 +65,12 @@ def active_dir():
 
 
 # ---- compiled programs held in memory ---------------------------------------------------------------
-# XLA on the CPU keeps every compiled program's kernels in memory maps of their own (measured: ~200 maps
-# for a 60-operation program, ~700 for a phase program), and Linux caps a process at vm.max_map_count
-# maps (65,530 by default). Past it the code loader cannot map the next program and the process dies
-# with a segmentation fault (CI did, in a physics gate that had loaded ~90 programs). So long jobs drop
-# JAX's in-memory programs when the maps near the cap; they reload from the persistent cache when needed.
-CROWDED_FRACTION = 0.7  # of vm.max_map_count: the programs of one more run or Jacobian (measured < 13,000 maps) fit
+# XLA on the CPU keeps every compiled program's kernels in memory maps of their own (hundreds per
+# program: docs/design-notes.md), and Linux caps a process at vm.max_map_count maps (65,530 by
+# default). Past it the code loader cannot map the next program and the process dies with a
+# segmentation fault (docs/speed.md). So long jobs drop JAX's in-memory programs when the maps near
+# the cap; they reload from the persistent cache when needed.
+CROWDED_FRACTION = 0.7  # of vm.max_map_count: leaves room for the programs of one more run or Jacobian (docs/design-notes.md)
 
 
 def map_count():

@@ -44,6 +44,21 @@ class Plan:
 
 
 def load_plan(path, tire_file=None, overrides=()) -> Plan:
+    """Read and validate a characterization config (`configs/characterize.toml`) into a `Plan`.
+
+    Every table is validated and every experiment built before anything runs; a bad field, an unknown
+    experiment, a missing tire file or a rated condition outside the grid is one `ConfigError` line.
+
+    Args:
+        path (str | Path): the characterization TOML.
+        tire_file (str | Path | None): a tire TOML to use instead of the config's `tire_file` (`--tire`); None: the
+            config's, relative to the config.
+        overrides (list[str]): `--set` strings; `tire.<section>.<key>=v` go to the tire file, the others to the config.
+
+    Returns:
+        The Plan: tire, experiment instances, the load x pressure grid conditions (SI), the pressures
+        (Pa), the rated condition ({"load_N", "pressure_Pa"}), the solver settings and the tables.
+    """
     from .config import apply_overrides
     from .experiments import REGISTRY
     from .experiments.phases import Protocol

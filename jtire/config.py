@@ -235,6 +235,17 @@ def tire_from_dict(raw: dict) -> TireSpec:
 
 
 def load_tire(path, overrides=()) -> TireSpec:
+    """Read and validate a tire file (`configs/tires/*.toml`) into a `TireSpec` (SI).
+
+    Args:
+        path (str | Path): the tire TOML file.
+        overrides (list[str]): `section.key=value` strings applied to the file before validation (the `tire.` of
+            `--set tire.<section>.<key>` taken off).
+
+    Returns:
+        The validated TireSpec. A missing or unreadable file, or any bad field, is one `ConfigError`
+        line naming the file and the field (see `read_tire_file`, which also returns the raw dict).
+    """
     return read_tire_file(path, overrides)[1]
 
 

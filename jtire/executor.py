@@ -285,7 +285,8 @@ def connect(spec: str, config_file=None):
             # fresh worker processes (spawned, never forked: JAX is not fork-safe), one thread each;
             # the environment (JTIRE_CPU_DEVICES, JTIRE_CACHE_DIR) is this process's
             # and Dask's own thread settings for BLAS dropped: the static solves' host BLAS calls round
-            # differently with another thread count (1e-9 in k_sv), and the numbers must be the default runner's
+            # differently with another thread count (docs/design-notes.md), and the numbers must be the
+            # default runner's
             import dask
 
             unset = {f"distributed.nanny.pre-spawn-environ.{k}": None for k in BLAS_THREADS}

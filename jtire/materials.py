@@ -90,6 +90,8 @@ class MaterialParams(eqx.Module):
 
     @property
     def prony_weights(self) -> np.ndarray:
+        """Maxwell branch weights c_b, shape (B,), of these relaxation times: `prony_weights` over the
+        default rolling band (1-100 Hz), so a part's mean loss tangent over the band equals its `loss`."""
         return prony_weights(np.asarray(self.relaxation_times))
 
     def part_table(self) -> dict:

@@ -66,14 +66,29 @@ class Size:
 
     @property
     def section_height(self) -> float:
+        """Section height (m): section width x aspect ratio."""
         return self.section_width * self.aspect_ratio
 
     @property
     def outer_diameter(self) -> float:
+        """Nominal outer diameter (m): rim diameter + 2 section heights."""
         return self.rim_diameter + 2.0 * self.section_height
 
 
 def parse_size(text: str) -> Size:
+    """Parse a metric radial designation (ETRTO / TRA, e.g. "445/50R22.5", "205/55R16", "P205/55ZR16").
+
+    Args:
+        text: WIDTH/ASPECT R RIM: section width in mm (100-999), aspect ratio in % (20-120), rim
+            diameter code in inches (10-30); an optional P (P-metric) prefix and Z before the R.
+
+    Returns:
+        The Size, SI (widths and diameters in m, aspect ratio as a fraction), normalised text, and its
+        kind: "truck" for a half-inch rim code (a 15-degree drop-centre rim), else "passenger".
+
+    Raises:
+        ConfigError: not a designation, a number out of range, or a P-metric size on a truck rim.
+    """
     m = _SIZE.match(text.strip())
     if not m:
         raise ConfigError(f"size {text!r}: not a metric radial designation WIDTH/ASPECT R RIM, e.g. 295/75R22.5 or "

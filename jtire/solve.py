@@ -8,8 +8,8 @@ damping), and the Maxwell branches and bristles are integrated exactly inside th
 The step is derived, not guessed: dt = safety * (2 / w_max) (sqrt(1 + z^2) - z), the stability
 limit of the explicit scheme with damping ratio z at the highest frequency w_max, which is found
 by power iteration on M^-1 K (Hessian-vector products of the elastic + pressure potential, Maxwell
-branches at their instantaneous stiffness, the tread contact added). The physics notes measured
-this rule within 3-8 % of the real limit; we use safety 0.8.
+branches at their instantaneous stiffness, the tread contact added). The rule lands close to the
+real limit (docs/design-notes.md); we use safety 0.8.
 
 A phase runs until its end time, or until it settles (kinetic energy relative to the rim below a
 tolerance, after the ramps), or until it blows up (a node faster than V_MAX or a non-finite
@@ -76,8 +76,8 @@ def force_balanced(model, drive, t, y):
     the settle damping carries no load (|c sum m v_rel| small), each within RESIDUAL_REL of the applied
     load + RESIDUAL_ABS. Kinetic energy alone is not enough: a turning point of a ringing state, or
     the slow overdamped creep of a soft mode, has little kinetic energy while the damping or the
-    rim's inertia still holds part of the load (measured: E09 on the coarse ring "settled" with 2.3 %
-    of the lateral force in the damping)."""
+    rim's inertia still holds part of the load (E09 on the coarse ring "settled" with part of its
+    lateral force in the damping: docs/design-notes.md)."""
     applied = jnp.abs(drive.rim_force(t))
     if drive.belt_loaded:
         applied = applied + jnp.abs(drive.belt_load(t))
@@ -178,8 +178,8 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
     Stops early when settled (t >= settle_after and KE < ke_tol) or unstable. Pass
     settle_after = inf to run the whole phase. max_steps is static; with the forward-mode adjoint
     it is only a bound (nothing is allocated per step), so every phase uses MAX_STEPS and shares
-    one compiled program. Derivatives are forward mode (jax.jvp / jacfwd over a few parameters,
-    physics notes: 2.9x a forward run for two parameters).
+    one compiled program. Derivatives are forward mode (jax.jvp / jacfwd over a few parameters; the
+    cost: docs/design-notes.md).
     frame_ts: optional times at which to also save whole frames (`jtire.frames.frame_fields`: nodes,
     contact pressure on the phase's own surface, strain-energy density, rim pose); samples after an
     early end are inf. None (the default) adds nothing to the program.
@@ -220,7 +220,7 @@ def run_phase(model, params, drive, y0, t0, t1, ts, settle_after, ke_tol, max_st
 
 # One compiled program per (model, surface type, loop size, drive options), shared by every phase
 # and experiment that has them: a phase is the unit of compilation (compiling whole experiments
-# cost ~30 s each on this machine; phases are reused across all of them).
+# costs far more: docs/design-notes.md; phases are reused across all of them).
 run_phase_jit = eqx.filter_jit(run_phase)
 N_SAVE = 201  # saved samples per phase (static: one size for every phase, so one compilation)
 

@@ -288,10 +288,10 @@ def first_mode(t, y, f_band=None, pad_to_resolution=0.01, t_start=None, n_modes=
     pad_to_resolution: grid spacing of the padded spectrum (Hz). t_start: drop samples before it
     (the impact itself is not free vibration). n_modes: modes in the time-domain fit; the first
     starts at the band peak, each further one at the strongest peak of the residual's spectrum,
-    because other modes, even outside the band, bias a one-mode fit (by 0.17 Hz in a test with a
-    second mode at 85 Hz). None (auto) adds modes while each removes >= 20 % of the residual
-    RMS, at most 4. fit=False skips the fit (the fit fields are then NaN). The fit costs a few
-    hundred least-squares passes over all N samples: decimate very long records first.
+    because other modes, even outside the band, bias a one-mode fit (docs/design-notes.md). None
+    (auto) adds modes while each removes >= 20 % of the residual RMS, at most 4. fit=False skips the
+    fit (the fit fields are then NaN). The fit costs a few hundred least-squares passes over all N
+    samples: decimate very long records first.
     Returns SpectrumResult.
     """
     t, y = from_time(*check_signal(t, y), t_start, 8)

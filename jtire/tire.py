@@ -12,6 +12,16 @@ from .model import TireModel
 
 @dataclasses.dataclass(frozen=True)
 class Tire:
+    """Everything a simulation of one tire needs, built by `make_tire` from a validated TireSpec.
+
+    Attributes:
+        spec: the validated tire file (SI).
+        mesh: the swept mesh (static topology, reference geometry, lumped masses; numpy).
+        model: the TireModel built on the mesh (the arrays and maps the force terms use). Mesh and
+            model are cached: tires of the same geometry, masses and mesh settings share them.
+        params: the MaterialParams of the spec (per-part moduli, thicknesses, losses, tread, friction).
+    """
+
     spec: TireSpec
     mesh: Mesh
     model: TireModel

@@ -183,7 +183,7 @@ def _box_qp(h, g, lo, hi, starts):
     Projected gradient with step 1/|h| descends monotonically even when h is indefinite; the
     set of free coordinates it ends with is then solved exactly (Newton on that face) when the
     face's Hessian is positive definite and the solution stays in the box. Plain numpy on tiny
-    matrices: no per-call solver overhead (L-BFGS-B costs milliseconds per call here).
+    matrices: no per-call solver overhead (an L-BFGS-B call costs far more: docs/design-notes.md).
     """
     q = lambda z: 0.5 * np.einsum("ki,ij,kj->k", z, h, z) + z @ g  # noqa: E731
     step = 1.0 / max(float(np.max(np.abs(np.linalg.eigvalsh(h)))), 1e-300)

@@ -33,9 +33,8 @@ def calibrate_variance(spec, thetas, y, extra_thetas, extra_y, level: float = 0.
     held-out runs, and a factor shrinks with it where the error (tied to parameters the emulator
     treats as inert) does not. Why not the floor alone: part of the held-out error is the
     emulator's own, which the added runs do remove. The held-out runs of one round cannot tell the
-    two apart (measured on the default-mesh study: a maximum-likelihood fit of v -> a v + b to them
-    put the error wholly in one part or the other from round to round), so "wider" keeps the split-
-    conformal guarantee under either: it is the conservative choice.
+    two apart (docs/design-notes.md), so "wider" keeps the split-conformal guarantee under either:
+    it is the conservative choice.
 
     Returns (a (m,), b (m,), z (k, m) held-out residuals in units of the uncorrected sd)."""
     r, v = held_out_residuals(spec, thetas, y, extra_thetas, extra_y)

@@ -18,15 +18,13 @@ Model, in theta = ln(parameter) (the calibration's ParamSpace):
 The log-probability is vectorized over walkers (emcee's vectorize=True): one emulator call per
 step for the whole ensemble.
 
-Where the walkers move (measured on the study calibration's 20 parameters, 64 walkers, the GP
-emulator, 10,000 steps): a uniform prior on a box puts hard walls in every direction the four
+Where the walkers move: a uniform prior on a box puts hard walls in every direction the four
 targets leave free, and emcee's stretch move, proposing along lines through other walkers, is
-mostly thrown out at those walls: acceptance 0.08, tau ~2000 (a 20,000-step chain did not
-converge). The chain therefore runs in unbounded coordinates z = logit(u), u = (theta - lower) /
-width (the bounds map to +-infinity; the density carries the Jacobian u (1 - u), so the posterior
-in theta is unchanged: `UnboundedPosterior`), with emcee's differential-evolution moves (80 %
-DEMove, 20 % DESnookerMove, emcee's documented mix for many dimensions): acceptance 0.22, tau
-~75-100, converged (50 tau) in ~5,000 steps.
+mostly thrown out at those walls (low acceptance, a long autocorrelation time). The chain therefore
+runs in unbounded coordinates z = logit(u), u = (theta - lower) / width (the bounds map to +-infinity;
+the density carries the Jacobian u (1 - u), so the posterior in theta is unchanged:
+`UnboundedPosterior`), with emcee's differential-evolution moves (80 % DEMove, 20 % DESnookerMove,
+emcee's documented mix for many dimensions), which mix far better there (docs/design-notes.md).
 
 Chains are seeded and stored in chain.h5 (emcee's HDF5 layout); the run proceeds in chunks of
 `check_every` steps aligned to multiples of check_every, and after each chunk estimates the
@@ -156,9 +154,9 @@ def _tau(chain):
 
 # ---- storage: atomic chunk files while running, one atomic chain.h5 when the run ends ----------
 # emcee's own HDF5 backend writes each step in place (chain row, acceptance counts, random state,
-# then the step counter) and is not safe to kill: a SIGKILL between those writes left acceptance
-# counts one step ahead of the counter (measured: a 10-kill soak), so the step was redone and
-# counted twice, and a kill during HDF5's metadata flush can leave the file unreadable. Here each
+# then the step counter) and is not safe to kill: a SIGKILL between those writes can leave acceptance
+# counts one step ahead of the counter (docs/design-notes.md), so the step is redone and counted
+# twice, and a kill during HDF5's metadata flush can leave the file unreadable. Here each
 # chunk of steps is its own file written atomically (jtire.io), and chain.h5 (emcee's layout, so
 # emcee.backends.HDFBackend(path, read_only=True) reads it) is written atomically at the end and
 # is then the resume point; a kill loses at most the chunk in progress, which reruns identically.

@@ -13,12 +13,10 @@ result; reused, not rerun, when the same draws are asked again).
 Model discrepancy (discrepancy.kind = "best_miss"): a target no parameter set of the calibration
 came near is not information about the parameters. Left in the likelihood with only its
 measurement sd, it drags the posterior onto the bounds of whatever moves it most and reports a
-precise, wrong tire (the study calibration: rolling resistance ~3x below its targets at every
-run; without a discrepancy the crown and tread loss factors sat at their upper bounds with
-posterior widths 3 % and 5 % of the prior's). Per target i the discrepancy sd is the smallest
-miss |ln(y_i / t_i)| over every simulator run of the calibration: the model demonstrably comes
-that close and no closer, so a residual of that size is put down to the model, not the
-parameters. It adds to the measurement variance; for a reachable target it is ~0.
+precise, wrong tire (the study calibration did: docs/design-notes.md). Per target i the discrepancy
+sd is the smallest miss |ln(y_i / t_i)| over every simulator run of the calibration: the model
+demonstrably comes that close and no closer, so a residual of that size is put down to the model,
+not the parameters. It adds to the measurement variance; for a reachable target it is ~0.
 
 Refinement (check.refine, check.rounds): if the simulator check finds the emulator's 90 % intervals
 covering fewer than 80 % or more than 97 % of the draws of some response, the check's runs (posterior
@@ -30,11 +28,9 @@ of draws (seed + 1) checks the refined emulator: the coverage it reports was not
 If that coverage is still off, the next round (refined_2/, seed + 2) trains on and cross-validates
 over every check run so far, up to check.rounds refined rounds. check.variance: "scale" multiplies
 the emulator's own variance, "floor" adds one that more runs do not shrink, "wider" (default) takes
-the wider of the two (`conformal.calibrate_variance`). Measured on the
-default-mesh study calibration with "scale": DY stayed at 0.78 (25 of 32 fresh draws) in both refined
-rounds, its errors at the fresh draws ~3x the refined GP's sd: the GP had just been trained on runs
-among those draws, so its variance there had shrunk while its error (tied to parameters it treats as
-inert) had not.
+the wider of the two (`conformal.calibrate_variance`). "scale" alone can stay off round after round:
+a refined GP has just been trained on runs among the next draws, so its variance there shrinks while
+its error (tied to parameters it treats as inert) does not (docs/design-notes.md).
 """
 
 import hashlib

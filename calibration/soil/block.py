@@ -15,7 +15,8 @@ Model (SI, z up, axisymmetric finite elements from `calibration.soil.mesh`):
 - The plate is rigid and smooth: its surface nodes share one vertical dof loaded by the force
   p pi a^2, raised in equal load steps, each solved by Newton with the consistent tangent
   (element-wise jax.jacfwd through the return mapping), assembled in block-tridiagonal form
-  (one block per node row) and solved by block elimination, ~10x cheaper than a dense LU.
+  (one block per node row) and solved by block elimination, much cheaper than a dense LU
+  (docs/design-notes.md).
 
 A consequence worth knowing: with perfect plasticity and an E-independent pre-stress, every
 displacement scales exactly as 1/E at fixed rho, so the error surface over (rho, E) has a valley
@@ -39,8 +40,7 @@ from ...errors import ConfigError, SimulationError
 
 # Suggested search box for the competition (see `suggested_bounds`): dry-to-saturated soil
 # densities and E of a soft, deformable sandbox soil. With the default spec the zero-error valley
-# runs from E* = 1.87 MPa at 1200 kg/m^3 to 1.61 MPa at 2200 kg/m^3 (benchmarks/bench_soil.py
-# --scan), about a quarter of the way up the E range; a wider E box (to 50 MPa) also contains it.
+# lies inside this box, low in its E range (benchmarks/bench_soil.py --scan; docs/design-notes.md).
 DENSITY_BOUNDS_KG_M3 = (1200.0, 2200.0)
 YOUNGS_MODULUS_BOUNDS_PA = (0.5e6, 5.0e6)
 

@@ -9,10 +9,9 @@ method: final error, calls to reach each threshold), progression.png (the study'
 best error so far against calls, median and quartiles over seeds).
 
 The competition logic takes the objective as an argument (`run_competition`), so it runs just
-as well on the closed-form stand-in used by the quick checks (`standin_objective`). Cost: the
-FE plate test takes about 30 ms per call after a ~2 s compile, so the full competition (3 methods
-x 20 seeds x 50 calls) takes about 100 s on a quiet 2-core machine; stop it at any time and run
-the same command again.
+as well on the closed-form stand-in used by the quick checks (`standin_objective`). The FE plate
+test compiles once and is then cheap per call (its cost: docs/design-notes.md); stop the
+competition at any time and run the same command again.
 """
 
 import dataclasses

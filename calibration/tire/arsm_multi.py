@@ -28,27 +28,14 @@ The loop (deterministic given seed and the values seen, so a killed run resumes 
    to keep the surfaces determined as it shrinks. The batch is evaluated at once.
 5. Stop on the budget (evaluations), on tol_percent, or when every width reaches min_width.
 
-Surface kind, measured (benchmarks/bench_calibration_arsm.py, STAND-IN simulator, budget 45,
-batch 4, local fill, distance-weighted fits; final best total error %, median [q25, q75]):
-
-    study.toml, d = 20, 10 seeds        arsm rule              trust rule
-      linear                            2.10 [0.61, 5.46]      1.73 [0.92, 2.84]
-      reduced (linear + squares)        1.90 [0.59, 4.68]      2.88 [2.32, 4.41]
-      ridge (+ square along gradient)   2.19 [1.25, 3.09]      3.67 [1.38, 7.47]
-      subspace (quadratic in the        3.05 [1.06, 10.5]      7.35 [1.87, 12.8]
-        responses' gradient subspace)
-      ONE quadratic of the |%| sum      35.5 [29.6, 43.3]  (calibration.arsm, the study's way)
-    4 identifiable parameters (known truth), 5 seeds: reduced/arsm <= 0.02 %, parameters to
-      < 1e-3 of the box; subspace alike; linear 0.1-0.7 %; ridge 0.16-2.1 %.
-
-At d = 20 the per-response kinds tie within their spread (a reduced quadratic is fitted only
-once 2d + 2 = 42 points exist; before that it is linear, and linear in ln-ln is already good on
-power-law responses); all beat one quadratic of the kinked sum by an order of magnitude. Where
-the points can fix curvature (d = 4) the reduced quadratic is best by another order. Default:
-"reduced" with the "arsm" region rule (the study's rule). Distance-weighted fits on every point
-(rather than the region's points topped up with the nearest, calibration.arsm's rule) and local
-fill points were chosen the same way (d = 20, 4 seeds: linear/trust 0.98 % vs 20.9 %,
-ridge/arsm 2.2 % vs 10.5 %).
+Surface kind: compared on the STAND-IN simulator (benchmarks/bench_calibration_arsm.py; the results:
+docs/design-notes.md). At d = 20 the per-response kinds tie within their spread (a reduced quadratic
+is fitted only once 2d + 2 = 42 points exist; before that it is linear, and linear in ln-ln is
+already good on power-law responses); all beat one quadratic of the kinked sum by an order of
+magnitude. Where the points can fix curvature (d = 4) the reduced quadratic is best by another
+order. Default: "reduced" with the "arsm" region rule (the study's rule). Distance-weighted fits on
+every point (rather than the region's points topped up with the nearest, calibration.arsm's rule)
+and local fill points were chosen the same way.
 """
 
 import dataclasses

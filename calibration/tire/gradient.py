@@ -16,12 +16,11 @@ values and Jacobian together at a stated cost (the batched shell runner), not a 
 optimistix would need it wrapped in pure_callback with a custom jvp, hide how many runs each
 step costs, and it has no bounds. Forty lines of LM keep every call visible and counted.
 
-Cost: a trial point is first evaluated alone (one forward run); the Jacobian, which costs 10-25
+Cost: a trial point is first evaluated alone (one forward run); the Jacobian, which costs many
 forward runs on the shell model, is computed only where a trial is accepted. A rejected trial so
 costs one run, and a budget that cannot pay for the next Jacobian still takes the step it has
-paid for (measured, track.toml at the default mesh, budget 45: with a Jacobian at every trial the
-first Jacobian's 24.6 runs, its compiling included, left too little for a second and the run
-stopped at the base tire without trying a step). Each call is recorded with its forward-run
+paid for (with a Jacobian at every trial, a small budget can end at the base tire without trying
+a step: docs/design-notes.md). Each call is recorded with its forward-run
 equivalents (`Simulator.cost_forward_equivalents`; the shell model measures a Jacobian's: the
 call's wall time over a timed forward evaluation of the same targets, its first call charged the
 two reference evaluations and its compiling) and wall time, in the same history format as ARSM,

@@ -17,7 +17,7 @@ ln(response) so that power laws become planes):
                                                                d + 1 + k (k + 1) / 2 terms
 
 z = 2 (u - c) / w over the fitting box (as in surrogates.quadratic). The choice for the tire
-(calibration.tire.arsm_multi) was measured on the stand-in; see that module.
+(calibration.tire.arsm_multi) was made on the stand-in; see that module and docs/design-notes.md.
 """
 
 import dataclasses

@@ -88,9 +88,9 @@ class ShellSimulator(Simulator):
         # A call holds as many points as fill the devices once with the most conditions any
         # transient target asks per point (E12's two loads: one point per 2 cores); the static
         # solves run case by case anyway. Long jobs evaluate in pieces of this size and save each
-        # as it returns. It costs no speed: 16 E12 cases on the default mesh took 9.37 s per case
-        # one per device per call and 9.94 s all at once, 8 vmapped per device
-        # (benchmarks/bench_batch.py --experiments rolling_resistance --cases 16 --modes sharded sharded-1).
+        # as it returns. It costs no speed against one call holding every point
+        # (benchmarks/bench_batch.py --experiments rolling_resistance --cases 16 --modes sharded sharded-1;
+        # docs/design-notes.md).
         n_dev = len(jax.devices()) if devices is None else int(devices)
         per_point = max([len(g["targets"]) for g in self.groups if g["exp"].shardable] or [1])
         self.points_per_call = max(1, n_dev // per_point)
@@ -189,9 +189,8 @@ class ShellSimulator(Simulator):
 
         # The static solves run case by case on one device each: with several devices, the static
         # experiments run at the same time, each on its own device (threads: JAX releases the GIL
-        # while a program runs). Measured on the default mesh, 2 cores: E02 3.3 s and E09 3.2 s one
-        # after the other, 5.0 s side by side (a study evaluation: 21.2 s -> 19.5 s). The transients then
-        # take every device.
+        # while a program runs), faster than one after the other (docs/design-notes.md). The transients
+        # then take every device.
         static = [g for g in self.groups if not g["exp"].shardable]
         n_dev = len(jax.devices()) if self.devices is None else int(self.devices)
         if len(static) > 1 and n_dev > 1:
@@ -338,8 +337,8 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: s
     backward sweep per quantity, whatever d is."""
     cache.release_programs_if_crowded()  # every Jacobian compiles programs of its own
     if (mode == "reverse" or not exp.shardable) and len(conditions) > 1:
-        # one condition after another: a backward sweep of the transient E12 on the default mesh peaked
-        # at 14.6 GB for one case (benchmarks/bench_gradients.py), and a vmapped Newton solve (static,
+        # one condition after another: a backward sweep of a transient holds a lot of memory for one case
+        # (benchmarks/bench_gradients.py; docs/design-notes.md), and a vmapped Newton solve (static,
         # steady) runs both branches of every conditional
         parts = [traced_jacobian(exp, tire, params_of, theta, [c], [q], mode) for c, q in zip(conditions, quantities)]
         return np.concatenate([v for v, _ in parts]), np.concatenate([j for _, j in parts])

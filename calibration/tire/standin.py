@@ -89,8 +89,9 @@ def rolling_resistance(params, load_n, geo=None):
 
 def footprint(params, load_n, geo=None):
     """Stand-in footprint (length, width), m, at vertical load load_n (N): half the chord of a 0.51 m
-    circle cut at the stand-in's deflection (the tread and belt spread a deflection; the shell model's
-    E01 patch is about half its geometric chord), and a width that grows from 0.30 m with it."""
+    circle cut at the stand-in's deflection (the tread and belt spread a deflection, so the shell model's
+    E01 patch is shorter than its geometric chord: docs/design-notes.md), and a width that grows from
+    0.30 m with it."""
     delta = load_n / stiffnesses(params, load_n, geo)[0]
     return jnp.sqrt(2.0 * 0.5095 * delta - delta**2), 0.30 + 2.0 * delta
 
@@ -118,8 +119,8 @@ class StandinSimulator(Simulator):
     """The stand-in (module docstring) for a ParamSpace, a base MaterialParams and targets.
 
     fail: optional callable theta (d,) -> bool; such points return a nan row (a failed run).
-    jacobian_cost: forward-run equivalents charged per jacobian call (reporting only; a jvp
-    per parameter costs about 1-3 forward runs on the shell model: the default says d).
+    jacobian_cost: forward-run equivalents charged per jacobian call (reporting only; the default
+    says d, one forward run per parameter; what a jvp costs on the shell model: docs/design-notes.md).
     Counters: n_points (points evaluated), batches (list of batch sizes), n_jacobians.
     """
 

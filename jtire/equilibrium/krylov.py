@@ -1,8 +1,8 @@
 """Right-preconditioned GMRES with a fixed basis size, for Newton steps with a lagged factorization.
 
 The Newton solver factors the Jacobian only now and then; in between, a step solves J(u) d = -r
-with exact Jacobian-vector products and the older factorization as preconditioner (measured on
-the coarse ring: a factor one load level old brings GMRES to 1e-10 in 11-13 iterations). Right
+with exact Jacobian-vector products and the older factorization as preconditioner (a factor one
+load level old brings GMRES to 1e-10 in a few iterations: docs/design-notes.md). Right
 preconditioning (x = M^-1 y) minimizes the true residual |J d + r|, the quantity the inexact
 Newton method needs; the basis vectors' preconditioned images are kept (as in flexible GMRES) so
 the solution costs no extra preconditioner solve. lineax's GMRES preconditions on the left and

@@ -1,16 +1,16 @@
 """solve_static: Newton's method on the static residual, with implicit derivatives.
 
-Method (measured choices: benchmarks/bench_equilibrium.py and the report). Newton's method with
-the exact Jacobian, safeguarded by a backtracking line search on the weighted residual norm (the
-contact penalty is sharp: a full step can push points deep into the road) and, when no step
-lowers the residual, Marquardt damping (J + lam diag|J|). The Jacobian is assembled and factored
-(`linalg`: colouring + block-cyclic banded solve) only when needed; in between, a Newton step is
-solved by GMRES (`krylov`) with exact Jacobian-vector products, preconditioned by the last
-factorization. Assembling costs ~120 Jacobian-vector products and factoring ~1 GFlop on the
-default mesh; a GMRES step with a factor one load level old needs ~5-15 products and solves. A
-new factorization is made when GMRES needs more than `refresh_after` iterations or fails, when
-damping is on, and (`factor_at_solution`) at the converged state, where it is the next load
-level's preconditioner and the implicit derivative's Jacobian.
+Method (measured choices: benchmarks/bench_equilibrium.py, docs/speed.md, docs/design-notes.md).
+Newton's method with the exact Jacobian, safeguarded by a backtracking line search on the weighted
+residual norm (the contact penalty is sharp: a full step can push points deep into the road) and,
+when no step lowers the residual, Marquardt damping (J + lam diag|J|). The Jacobian is assembled and
+factored (`linalg`: colouring + block-cyclic banded solve) only when needed; in between, a Newton
+step is solved by GMRES (`krylov`) with exact Jacobian-vector products, preconditioned by the last
+factorization. Assembling costs ~120 Jacobian-vector products and factoring ~1 GFlop on the default
+mesh; a GMRES step with a factor one load level old needs only a few products and solves. A new
+factorization is made when GMRES needs more than `refresh_after` iterations or fails, when damping
+is on, and (`factor_at_solution`) at the converged state, where it is the next load level's
+preconditioner and the implicit derivative's Jacobian.
 Dynamic relaxation / FIRE (thousands of explicit steps, each as costly as a residual) and a
 Krylov method with a cheap preconditioner (the shell's membrane-to-bending stiffness ratio is
 ~1e4) were not competitive.

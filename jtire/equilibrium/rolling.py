@@ -78,7 +78,8 @@ _solve_level = eqx.filter_jit(_level)
 def _committed(tree):
     """Every concrete array of tree committed to the current default device: a compiled program is
     specific to whether each input is committed, and a path mixes fresh arrays with earlier levels'
-    outputs and a case's committed inputs (measured: three 30 s compiles of one trace without this)."""
+    outputs and a case's committed inputs (without it, one trace compiled several times
+    over: docs/design-notes.md)."""
     dev = jax.config.jax_default_device or jax.devices()[0]
 
     def put(a):

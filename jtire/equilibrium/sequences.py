@@ -2,7 +2,7 @@
 
 A sequence is a stack of `Levels`, solved in order by one `lax.scan` (`run_levels`): one Newton
 solver in the compiled program however many stages the experiment has (each solver instance
-costs tens of seconds of XLA compilation on a 2-core machine). Each level starts from the previous
+adds a long XLA compilation: docs/design-notes.md). Each level starts from the previous
 solution, moved with the rim where the rim is held at a new position; the road is placed where
 the previous state first touches it when asked; and the friction anchors follow the incremental
 law of `residual`: each level's trial shear starts from the previous level's shear and position

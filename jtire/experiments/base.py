@@ -27,6 +27,16 @@ from .phases import Case, Protocol
 
 
 class Experiment(eqx.Module):
+    """Base class of every virtual experiment (the module docstring describes the interface).
+
+    Class attributes: `name` (the registry and config key), `study_id` (e.g. "E02"), `description`,
+    `schema` (the config table's Fields), `needs_load` (a condition must give a load),
+    `per_pressure` (the load does not enter: one condition per pressure), `aux_names` (the case's
+    own variables), `traced_names` (what `traced` returns), `quantity_names` (what `reduce` writes).
+    Instances are built by `from_table`; `proto` holds the solver protocol (settling damping,
+    kinetic-energy tolerance, ramps and time limits; SI).
+    """
+
     name: ClassVar[str]
     study_id: ClassVar[str]
     description: ClassVar[str]
@@ -43,9 +53,9 @@ class Experiment(eqx.Module):
     def shardable(self) -> bool:
         """Whether a batch of this experiment may be split over several devices. Static and steady
         solves may not: their Newton loops end after a different number of iterations on each device, and the
-        partitioned program then deadlocks on CPU host devices (measured: a 4-case E01 static batch
-        on 2 devices hung with every thread waiting); `batch.run` runs them case by case, unbatched,
-        on one device (a vmapped Newton loop runs both branches of its conditionals)."""
+        partitioned program then deadlocks on CPU host devices (docs/design-notes.md); `batch.run` runs
+        them case by case, unbatched, on one device (a vmapped Newton loop runs both branches of its
+        conditionals)."""
         return self.time_stepped
 
     @property
@@ -71,6 +81,8 @@ class Experiment(eqx.Module):
         return [dict(condition)]
 
     def aux(self, case: dict) -> np.ndarray:
+        """The case's own variables (the values of `aux_names` in a host case dict, e.g. the slip angle
+        in rad) as a float array of shape (len(aux_names),): the `aux` of the traced `Case`."""
         return np.array([case[k] for k in self.aux_names], float)
 
     @abc.abstractmethod

@@ -9,8 +9,8 @@ machine (`stages.rolling_plan`): the axle stays, the road moves under it at V (-
 for an SAE slip angle a. Rim lateral position, camber and steer held; z carries the load. Every slip
 angle is a case of its own (case aux = the angle), so a whole sweep, or a whole grid of sweeps, is one
 batch of one compiled program. The lateral deflection builds up during the settle and ramp stages
-(measured at 2 deg: ~85 % of the steady force after 0.1 s = 0.67 m rolled); only the undamped window
-is measured.
+(most of the steady force is there before the damping is off: docs/design-notes.md); only the
+undamped window is measured.
 
 Reduction (experiments.md), SAE signs at the boundary (y_SAE = -y, z_SAE = -z):
   lateral force in road axes  F_lat = F_y,SAE cos a - F_x sin a

@@ -98,7 +98,7 @@ def _with_end_frame(model, params, ph, res):
 # batch shape, sharding), shared by every phase of every experiment that has it: the flat-road
 # experiments (E01, E02, E04, E09-E12) all run through one program, the rigid-belt ones (E05, E07,
 # E08) through another. Compiling each experiment as a whole (all its phases inlined into one XLA
-# program) cost 40-100 s per experiment on this 2-core machine; shared phases compile a few times in all.
+# program) costs far more (docs/design-notes.md); shared phases compile a few times in all.
 _run_one_counted = eqx.debug.assert_max_traces(_run_one, max_traces=None)
 run_one = eqx.filter_jit(_run_one_counted)
 

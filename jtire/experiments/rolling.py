@@ -11,10 +11,9 @@ rolling resistance (physics notes): the hub force (steady mean of -F_x; `contact
 force on the tire, so the drag is -F_x) and the lost power over the speed (the model's own losses,
 smooth: Maxwell branches and tread normal damping, `dissipated`, plus sliding in the patch,
 `friction_work`). No rolling-resistance coefficient is prescribed anywhere. The hub force is noisy
-(polygon effect, the wheel's rotational modes on the tread's shear stiffness): on the default tire
-at 38.7-45.4 kN its standard deviation is 45-75 N around a 200-240 N mean, and an 80 ms mean carries
-a block standard error of 3-7 N (1.5-3 %). In steady state the road's power -F_x V equals the lost
-power; their relative difference is the energy-balance check.
+(polygon effect, the wheel's rotational modes on the tread's shear stiffness), so its mean over the
+window carries a block standard error of a few percent (docs/design-notes.md). In steady state the
+road's power -F_x V equals the lost power; their relative difference is the energy-balance check.
 """
 
 import equinox as eqx

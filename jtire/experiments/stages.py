@@ -94,10 +94,9 @@ def rolling_plan(model, params, case, proto, *, outer_radius, speed, slip_angle,
     return loaded_plan(model, params, case, proto, case.load, n_save, extra=extra)
 
 
-# Stage lengths (defaults measured on the default tire at 41.4 kN, 15 mph): the dissipated power is
-# within 1 % of its final value after 40 ms of damped rolling; the ramp (60 ms) and 20 ms of free
-# rolling leave a spin wobble below 0.006 rad/s; 80 ms (~11 segment periods) of measurement then
-# give the hub-force mean to a few percent (block standard error reported).
+# Stage lengths: the defaults let the dissipated power settle in the damped rolling, the ramp and the
+# free rolling calm the spin, and the measurement give the hub-force mean to a few percent (block
+# standard error reported); measured on the default tire (docs/design-notes.md).
 ROLLING_SCHEMA = {
     "speed_mph": Field(float, U.MPH, 0.5, 60, 15.0, "mph"),
     "settle_s": Field(float, 1, 0.005, 2, 0.04, "s"),

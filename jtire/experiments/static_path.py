@@ -39,7 +39,7 @@ def _static_vertical_path(model, params, pressure, loads, lateral):
 # One compiled program per number of load levels (and batch shape), shared by E01, E02 and E09's
 # static part when their level counts agree (the defaults do: 13 vertical loads, then 2 lateral
 # levels, at zero force for E01 and E02: a converged state re-solved, no Newton step): a Newton
-# solver costs 25-60 s of compilation here, and tracing it again in a new process ~9 s.
+# solver is long to compile, and to trace again in a new process (docs/design-notes.md).
 _static_path_jit = eqx.filter_jit(_static_vertical_path)
 STATIC_LOADS = 13  # E02's default: 12 levels to max_load + the stated load; E01 and E09 use as many
 

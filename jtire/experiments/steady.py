@@ -16,16 +16,15 @@ from ..errors import SimulationError
 from ..schema import Field
 from .static_path import static_summary
 
-# Fields every steady experiment's table has. 8 points per segment: measured on the default tire at
-# 38.7 kN, E12's drag and lost power change by 1.1 % and 3.3 % from 8 to 16 (bench_steady.py).
+# Fields every steady experiment's table has. 8 points per segment: doubling them changes E12's drag
+# and lost power by a few percent (bench_steady.py; docs/design-notes.md).
 STEADY_FIELDS = {
     "steady_subpoints": Field(int, 1, 2, 32, 8, "contact points per segment along the streamlines (steady)"),
     "steady_load_levels": Field(int, 1, 1, 12, 2, "load levels of the steady loading at speed"),
 }
 # The two readings of the loss (hub force, lost power over speed) differ by the discretization of the
-# flow: on the default mesh 0.4-10.9 % over the 3 x 3 grid, largest where the patch spans fewest
-# segments (docs/steady-rolling.md). Beyond this the flow is too coarse for either reading and the
-# result is an error.
+# flow, most where the patch spans fewest segments (docs/steady-rolling.md, docs/design-notes.md).
+# Beyond this the flow is too coarse for either reading and the result is an error.
 ENERGY_BALANCE_TOL = 0.15
 
 

@@ -38,7 +38,7 @@ class VerticalStiffness(Experiment):
               "n_levels": Field(int, 1, 4, 60, STATIC_LOADS - 1, "load levels of the static load path (static method)"),
               "max_load_kN": Field(float, U.KN, 1, 500, 60.0, "kN"),
               "stated_load_kN": Field(float, U.KN, 0, 500, 0.0, "kN (0: the condition's load)"),
-              "ramp_s": Field(float, 1, 0.02, 5, 0.9, "s"),  # 0.3 s read 4.8 % stiff at 45 kN (viscoelastic lag), 0.9 s 1.0 %
+              "ramp_s": Field(float, 1, 0.02, 5, 0.9, "s"),  # a shorter ramp reads stiff: the viscoelastic lag (docs/design-notes.md)
               "fit_range_kN": Field(list, U.KN, 0, 500, [10.0, 60.0], "kN")}
     traced_names = ("k_sv_N_per_m", "deflection_m")
     quantity_names = ("k_sv_N_per_m", "k_sv_fit_N_per_m", "deflection_m", "stated_load_N", "max_load_N", "fit_r2",

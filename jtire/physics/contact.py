@@ -10,7 +10,7 @@ Tangential: an elasto-plastic bristle per point, the tread column's shear deflec
 z <- z + v_slip dt, then z is scaled back so that k_t |z| <= mu F_n (a return mapping). This is
 regularized Coulomb friction with the tread's own tangential compliance, and unlike a viscous
 regularization (F = mu F_n v / v_eps) it adds no velocity stiffness: it does not shrink the
-stable step (physics notes: v_eps = 1 cm/s forced steps 10x below the structural limit).
+stable step (a viscous one does, by far: docs/design-notes.md).
 """
 
 import abc

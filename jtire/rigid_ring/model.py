@@ -134,7 +134,7 @@ class RigidRing(eqx.Module):
         contact = (rho > 0).astype(y.dtype)
         # no damper force before the touch (doc §2: rho = max(0, .)); the damper fades in over the
         # first RHO_RAMP of deflection so the force stays continuous: a jump C_vr x impact speed at
-        # the touch would make the adjoint miss the touch time's sensitivity (10 % off in a test)
+        # the touch would make the adjoint miss the touch time's sensitivity (docs/design-notes.md)
         ramp = jnp.clip(rho / RHO_RAMP, 0.0, 1.0)
         fz = contact * jnp.maximum(0.0, p.k_vr * rho + ramp * p.C_vr * (zr_dot - vzb))
         fsx = -p.k_bx * (xb - xa) - p.C_bx * (vxb - vxa)

@@ -98,7 +98,7 @@ def drop_test(d: Derived, drop_height=0.02, duration=0.4, gravity=0.0, n_save=40
     k_sv, m_tot = d.k_sv, t.m_tot_kg
     # static deflection: where the wheel rests under the load (docs/rigid-ring.md §8: F_z0/k_sv), as
     # the shell's drop reports it (its rest after the drop); the decay fit's asymptote is no rest
-    # position when the record is mostly lift-offs (18 % short at 2312.5 kg on the default mesh)
+    # position when the record is mostly lift-offs (it falls short: docs/design-notes.md)
     q = {"static_deflection_m": t.unloaded_radius_m - eq["z_a"],
          "static_deflection_fit_m": t.unloaded_radius_m - fd.x_inf_fit,
          "static_deflection_equilibrium_m": t.unloaded_radius_m - eq["z_a"],

@@ -295,6 +295,13 @@ def loads(text: str) -> dict:
 
 
 def read(path) -> dict:
+    """Read a `.tir` property file (as `write` makes it, or another MF 6.1/6.2 file in TeimOrbit layout).
+
+    Returns:
+        {SECTION: {KEY: value}}, section and key names upper-cased, values in the file's units (SI for
+        the files jtire writes); quoted values are strings, the rest numbers (see `loads`). A line that
+        cannot be read is a `ConfigError` naming it.
+    """
     from pathlib import Path
 
     return loads(Path(path).read_text())
