@@ -105,6 +105,10 @@ CASES = [
          "--longvl nan: must be a speed"),
     Case("export-tir-fittyp-choice", lambda t: ["export-tir", _w(t, "c.json", "{}"), "--fittyp", "52"],
          "argument --fittyp: invalid choice"),
+    # ---- reproduce (more in tests/test_reproduce.py) -------------------------------------------------------
+    Case("reproduce-foreign-folder", lambda t: ["reproduce", "--quick", "--out", str(Path(_w(t, "x/notes.txt", "a")).parent)],
+         "is not a reproduce folder"),
+    Case("reproduce-out-is-a-file", lambda t: ["reproduce", "--quick", "--out", _w(t, "out.txt", "a")], "out.txt"),
     # ---- new-tire (more in tests/test_new_tire.py) -------------------------------------------------------
     Case("new-tire-not-a-size", lambda t: ["new-tire", "12.00R20", "--out", str(Path(t) / "x")], "size '12.00R20'"),
     Case("new-tire-measured-missing", lambda t: ["new-tire", "205/55R16", "--measured", str(Path(t) / "m.csv"),
