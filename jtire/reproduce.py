@@ -163,10 +163,30 @@ def _competition_table(out: Path) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _posterior(out: Path) -> str:
-    """The sampler's verdict, the parameters' and the responses' 90 % intervals, the check's coverage."""
+def _sample_rounds(out: Path) -> list:
+    """The posterior's rounds, first to last: sample/, then its refined rounds (refined/, refined_2/, ...) where
+    the check's coverage sent it to retrain the emulator on the check's runs."""
     d = out / "sample"
+    refined = [p for p in d.glob("refined*") if p.is_dir() and (p / "diagnostics.json").is_file()]
+    order = lambda p: int(p.name.split("_")[1]) if "_" in p.name else 1  # noqa: E731
+    return [d] + sorted(refined, key=order)
+
+
+def _coverage(folder: Path) -> str:
+    c = json.loads((folder / "check.json").read_text())
+    return ", ".join(f"{k} {v:.2f} ({c['inside'][k]}/{c['n']})" for k, v in c.get("coverage", {}).items())
+
+
+def _posterior(out: Path) -> str:
+    """The final round's sampler verdict, parameter and response intervals, and the check's coverage in every
+    round (the first round's too: how far the unrefined emulator was off)."""
+    rounds = _sample_rounds(out)
+    d = rounds[-1]
     parts = []
+    if len(rounds) > 1:
+        parts.append(f"The check's coverage sent the posterior through {len(rounds) - 1} refined round(s): the "
+                     f"check's runs joined the emulator's training set and its variance was rescaled. Below: the "
+                     f"final round (sample/{d.name}/).\n")
     diag = d / "diagnostics.json"
     if diag.is_file():
         g = json.loads(diag.read_text())
@@ -180,13 +200,12 @@ def _posterior(out: Path) -> str:
                      "prior's (in ln p):\n\n" + _csv_table(d / "widths.csv", ["parameter", "median", "lower", "upper",
                                                                                 "unit", "ratio"]))
     parts.append("Posterior predictive of the tire model (central 90 % intervals):\n\n" + _file(d / "predictive.md"))
-    chk = d / "check.json"
-    if chk.is_file():
-        c = json.loads(chk.read_text())
-        rows = ", ".join(f"{k} {v:.2f} ({c['inside'][k]}/{c['n']})" for k, v in c.get("coverage", {}).items())
-        parts.append(f"Check: {c.get('n')} posterior draws run through the shell model; the share inside the "
-                     f"emulator's {c.get('level', 0.9):.0%} intervals: {rows}.\n")
-    return "\n".join(parts)
+    checked = [r for r in rounds if (r / "check.json").is_file()]
+    if checked:
+        parts.append("Check: posterior draws run through the shell model; the share of them inside the emulator's "
+                     "90 % intervals (80-97 % is the band the check accepts):\n")
+        parts += [f"- {'first round' if r == rounds[0] else r.name}: {_coverage(r)}" for r in checked]
+    return "\n".join(parts) + "\n"
 
 
 def _figures(out: Path) -> list:

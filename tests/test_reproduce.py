@@ -117,3 +117,24 @@ def test_failed_cases_do_not_stop_the_chain(tmp_path, monkeypatch, capsys, two_s
     data_mtime = (out / "data" / "fits.csv").stat().st_mtime_ns
     assert main(["reproduce", "--quick", "--out", str(out)]) == 0 and len(calls) == 2
     assert (out / "data" / "fits.csv").stat().st_mtime_ns == data_mtime
+
+
+def test_report_takes_the_posteriors_final_round(tmp_path):
+    """Where the check sent the posterior through refined rounds (sample/refined/, sample/refined_2/, ...), the
+    report's intervals are the final round's, and the coverage of every round is listed, the first one too."""
+    def round_(folder, inside, n, tau):
+        folder.mkdir(parents=True)
+        (folder / "diagnostics.json").write_text(json.dumps({"converged": True, "steps": 900, "tau": [tau],
+                                                             "n_tau_required": 50, "rhat": [1.01],
+                                                             "acceptance_mean": 0.3}))
+        (folder / "check.json").write_text(json.dumps({"coverage": {"DZ": inside / n}, "inside": {"DZ": inside},
+                                                       "n": n}))
+        (folder / "predictive.md").write_text(f"| DZ | from {folder.name} |\n")
+
+    round_(tmp_path / "sample", 1, 32, 11.0)
+    round_(tmp_path / "sample" / "refined", 30, 31, 12.0)
+    round_(tmp_path / "sample" / "refined_2", 28, 30, 13.0)
+    text = R._posterior(tmp_path)
+    assert "2 refined round(s)" in text and "| DZ | from refined_2 |" in text and "max tau 13" in text
+    assert "- first round: DZ 0.03 (1/32)" in text and "- refined: DZ 0.97 (30/31)" in text
+    assert "- refined_2: DZ 0.93 (28/30)" in text
