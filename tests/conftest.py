@@ -298,3 +298,12 @@ def e13_runs(runs):
 def undamped_tire(coarse_tire):
     """The coarse tire with every rubber loss zero (same leaves and dtypes: the same programs)."""
     return dataclasses.replace(coarse_tire, params=coarse_tire.params.without_damping())
+
+
+@pytest.fixture
+def user_dir(tmp_path, monkeypatch):
+    """A fresh working folder with configs/ linked from the repository (a user's checkout): the README's and
+    docs' commands run here."""
+    (tmp_path / "configs").symlink_to(REPO / "configs", target_is_directory=True)
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
