@@ -1,6 +1,6 @@
 """`jtire reproduce`: the chain's manifest, resume and refusal, and its report. The fast tests run a chain of the two
 cheap stages (the measured data and the quick soil competition, both real); the whole quick chain (`--quick`,
-coarse ring, about 4 min) is the physics gate's test_reproduce_quick in tests/test_readme_commands.py."""
+coarse ring, about 4 min) is the physics gate's test_reproduce_quick in tests/test_readme_workflows.py."""
 
 import json
 
