@@ -26,7 +26,7 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
 from . import cache, solve
-from .errors import JtireError
+from .errors import JtireError, UnderResolved
 from .experiments.phases import Case
 from .experiments.program import phase_traces
 
@@ -183,6 +183,8 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
             if len(pending[i]) == len(exp.cases(conditions[i])):
                 got = pending.pop(i)
                 res = _reduce(exp, tire, conditions[i], [got[c] for c in sorted(got)], keep_outputs, wall / len(chunk))
+                if isinstance(res, CaseFailure) and isinstance(res.error, UnderResolved):
+                    res = _refined(exp, tire, conditions[i], plist[i] if params_batched else None, keep_outputs, res)
                 results[i] = res
                 done += 1
                 if on_result is not None:
@@ -225,6 +227,26 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
                 f.cancel()
             raise
     return results
+
+
+MAX_REFINED_N_THETA = 256  # segments: a case whose result is under-resolved is rerun on up to this many
+
+
+def _refined(exp, tire, condition, params, keep, failure):
+    """A case that failed a discretization check of its own (`UnderResolved`) rerun on a ring with twice
+    the segments (again, up to MAX_REFINED_N_THETA); the result says which ring gave it and why. The
+    failure stands where the ring cannot be refined further."""
+    from .tire import make_tire
+
+    n = tire.spec.n_theta
+    if 2 * n > MAX_REFINED_N_THETA:
+        return failure
+    fine = make_tire(dataclasses.replace(tire.spec, n_theta=2 * n))
+    [res] = run(exp, fine, [condition], None if params is None else [params], batch=1, keep_outputs=keep)
+    if not isinstance(res, CaseFailure):  # an inner refinement set n_theta; the first reason is kept
+        res.info.setdefault("n_theta", fine.spec.n_theta)
+        res.info |= {"refined_from_n_theta": n, "refined_because": str(failure.error)}
+    return res
 
 
 def _reduce(exp, tire, condition, outputs, keep, wall_per_case):

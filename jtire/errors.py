@@ -17,6 +17,15 @@ class SimulationError(JtireError, RuntimeError):
     """A simulation went unstable or failed to settle; the message says where and when."""
 
 
+class UnderResolved(SimulationError):
+    """A result failed a discretization check of its own (the steady flow's energy balance): the ring has
+    too few segments for it. `batch.run` reruns such a case on a ring with more segments."""
+
+    def __init__(self, message, n_theta: int):
+        self.n_theta = int(n_theta)
+        super().__init__(message)
+
+
 class ClusterError(JtireError, RuntimeError):
     """The cluster named by --cluster cannot be used (unreachable, another jtire build, a case that killed
     its workers); the message says which and what to do."""

@@ -36,6 +36,9 @@ def table_lines(res) -> list:
     for k, v in res.quantities.items():
         lines.append(f"  {k:<{w}}  {_fmt(v)}")
     method = res.info.get("method")
+    if "refined_from_n_theta" in res.info:  # batch.run reran an under-resolved case on a finer ring
+        lines.append(f"  {'ring':<{w}}  {res.info['n_theta']} segments (refined from {res.info['refined_from_n_theta']}: "
+                     f"{res.info['refined_because']})")
     if method in ("static", "steady"):
         lines.append(f"  {'converged':<{w}}  {res.checks.get(method + '_converged')}   ({method}: "
                      f"{res.info.get('levels')} levels, {res.info.get('newton_iterations')} Newton iterations, "

@@ -143,6 +143,22 @@ class Path:
         self.names.append(name)
         return ob
 
+    def attempt(self, setup, name: str, loose: bool = False, keep_failure: bool = False):
+        """(observations, ok): one more level, kept only if its Newton converged (ok True); a level that
+        failed is dropped and the path restored to where it was (ok False), so that a continuation can
+        retry with a smaller step (keep_failure: kept, for `check` to report). ok is None when the solve
+        is traced (no host value to judge), and the level is kept as `level` keeps it."""
+        saved = (self.u, self.P, self.valid)
+        ob = self.level(setup, name, loose)
+        try:
+            ok = bool(self.infos[-1].converged)
+        except jax.errors.ConcretizationTypeError:
+            return ob, None
+        if not ok and not keep_failure:
+            del self.obs[-1], self.infos[-1], self.names[-1]
+            self.u, self.P, self.valid = saved
+        return ob, ok
+
     @property
     def q(self):
         return R.unpack(self.model, self.u, False)[1]

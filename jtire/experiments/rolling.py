@@ -176,7 +176,8 @@ class RollingResistance(Rolling):
         q |= ST.losses(lv)
         f_power = q["dissipated_power_W"] / speed
         q |= {"rolling_resistance_from_power_N": f_power, "rrc_from_power": f_power / fz,
-              "energy_balance_rel_diff": ST.require_energy_balance(self.name, drag, q["dissipated_power_W"], speed),
+              "energy_balance_rel_diff": ST.require_energy_balance(self.name, drag, q["dissipated_power_W"], speed,
+                                                                   tire.spec.n_theta),
               "vertical_force_N": fz, "effective_rolling_radius_m": speed / omega, "spin_rad_per_s": omega,
               "deflection_m": -float(lv["q"][2]), "speed_m_per_s": speed, "load_N": load}
         q = self._target(load, q)

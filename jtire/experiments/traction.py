@@ -159,10 +159,19 @@ class Traction(Experiment):
         surface = self.road().surface(path.height, ER.road_velocity(self.speed))
         x_rear, x_front = x_range_traced(model, state, surface_gap(surface))
         obs = [path.obs[-1]]
-        for k in self.slips[1:]:
-            setup = ER.setup_of(case.pressure, surface, omega=(1 + k) * w_free, rim_free=ER.LOADED_SPIN_HELD,
-                                load=case.load, subpoints=self.subpoints)
-            obs.append(path.level(setup, f"slip {100 * k:.3g} %"))
+
+        def setup_at(k):
+            return ER.setup_of(case.pressure, surface, omega=(1 + k) * w_free, rim_free=ER.LOADED_SPIN_HELD,
+                               load=case.load, subpoints=self.subpoints)
+
+        failed = None
+        for k0, k in zip(self.slips[:-1], self.slips[1:]):  # a failed step is retried in halves
+            if failed is not None:  # the slips beyond a failure repeat it; the summary reports it
+                obs.append(failed)
+                continue
+            ob, ok = ST.continue_to(path, setup_at, k0, k, lambda b: f"slip {100 * b:.3g} %", max_step=abs(k - k0))
+            obs.append(ob)
+            failed = ob if ok is False else None
         out = ST.stacked(path, range(n))
         return out | {"slips": jax.tree_util.tree_map(lambda *a: jnp.stack(a), *obs), "a": 0.5 * (x_front - x_rear),
                       "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"]}
@@ -170,7 +179,7 @@ class Traction(Experiment):
     def _reduce_steady(self, tire, condition, out):
         load, V = condition["load_N"], float(self.speed)
         checks, info = ST.summary(self.name, out["infos"], ST.level_names(self.load_levels))
-        ST.summary(self.name, out["sweep_infos"], [f"slip {100 * k:.3g} %" for k in self.slips[1:]])
+        ST.summary(self.name, out["sweep_infos"], lambda k: f"slip sweep, level {k + 1}")  # halved steps add levels
         sl = jax.tree_util.tree_map(np.asarray, out["slips"])
         kappa = np.asarray(self.slips)
         fx, fz, w = sl["contact_force"][:, 0], sl["contact_force"][:, 2], sl["omega"]
