@@ -16,6 +16,7 @@ from pathlib import Path
 
 
 from . import batch, results
+from . import units as U
 from .config import parse_solver, read_tire_file, read_toml, validate_table
 from .errors import ConfigError
 from .fingerprint import claim_folder, code_version
@@ -159,6 +160,20 @@ def run(plan: Plan, out, batch_size: int = 1, progress=None, on_case=None, execu
     return found
 
 
+def refined_cases(found: dict) -> list:
+    """One line per case that `batch.run` reran on a finer ring (its own discretization check failed
+    on the tire's mesh): which case, which ring and why. found: `run`'s {experiment: [result dicts]}."""
+    lines = []
+    for name, res in found.items():
+        for r in res:
+            info = (r or {}).get("info") or {}
+            if "refined_from_n_theta" in info:
+                c = r.get("condition") or {}
+                at = (f"{c['load_N'] / U.G0:.1f} kg, " if "load_N" in c else "") + f"{c['pressure_Pa'] / U.PSI:.0f} psi"
+                lines.append(f"{name} at {at}: rerun on {info['n_theta']} segments ({info['refined_because']})")
+    return lines
+
+
 def total_cases(plan: Plan, out=None) -> tuple:
     """(all cases, cases already done in `out`) counted in simulated cases (E10: one per slip angle)."""
     total = done = 0
@@ -212,7 +227,7 @@ def characterization(plan: Plan, out, found: dict):
                     continue
                 if "load_N" in cc and abs(cc["load_N"] - c["load_N"]) > 1e-6:
                     continue
-                parts.append(r)
+                parts.append(r | {"study_id": by_name[name].study_id})
                 if name == "cornering":
                     s = results.read_signals(results.cases_dir(out, name) / results.case_name(i, cc))
                     e10 = None if s is None else {k: v.tolist() for k, v in s.items()}

@@ -63,6 +63,30 @@ def test_row_from_results_merges_known_quantities():
     np.testing.assert_array_equal(r.curves.M_z_SAE_Nm, [0, 90, 180])
 
 
+def test_row_takes_each_quantity_from_its_own_experiment():
+    """k_sv is E02's (the static secant); the drop test (E04) also reports a k_sv (its rest at the end
+    of the drop), which must not replace E02's in the row, whichever order the results come in. A
+    result without a study_id still overrides as before; E04's own C_tot is taken from E04."""
+    e02 = {"study_id": "E02", "quantities": {"k_sv_N_per_m": 1.2e6}}
+    e04 = {"study_id": "E04", "quantities": {"k_sv_N_per_m": 1.45e6, "C_tot_Ns_per_m": 900.0}}
+    for order in ([e02, e04], [e04, e02]):
+        assert row_from_results(45371.25, 827371.0, order).q == {"k_sv_N_per_m": 1.2e6, "C_tot_Ns_per_m": 900.0}
+    assert row_from_results(1.0, 1.0, [e04, {"quantities": {"k_sv_N_per_m": 1.3e6}}]).q["k_sv_N_per_m"] == 1.3e6
+
+
+def test_refined_cases_name_the_case_the_ring_and_the_reason():
+    """`characterize.refined_cases`: one line per case that batch.run reran on a finer ring, with the
+    condition in the config's units; a case without refinement, or failed (None), gives none."""
+    from jtire import units as U
+    from jtire.characterize import refined_cases
+
+    r = {"condition": {"load_N": 2312.5 * U.G0, "pressure_Pa": 150 * U.PSI},
+         "info": {"n_theta": 128, "refined_from_n_theta": 64, "refined_because": "the hub drag ..."}}
+    plain = {"condition": {"pressure_Pa": 120 * U.PSI}, "info": {}}
+    assert refined_cases({"rolling_resistance": [r, None, plain]}) == [
+        "rolling_resistance at 2312.5 kg, 150 psi: rerun on 128 segments (the hub drag ...)"]
+
+
 def test_missing_quantities_give_dashes_and_none(char):
     c = synthetic.drop(char, {"k_by_N_per_m", "C_by_2p_Ns_per_m"})
     rows = report.table_rows(c, "out")

@@ -58,6 +58,8 @@ def run_cli(args, say) -> int:
     for bar in bars:
         bar.close()
     walls["total_s"] = time.perf_counter() - t0
+    for line in ch.refined_cases(results):  # cases rerun on a finer ring (batch.run): which and why
+        say(line)
     char = ch.characterization(plan, out, results)
     write_characterization(out, char)
     written, lines = export(char, out, tir_name="tire.tir", source=str(plan.path.name))
@@ -79,7 +81,6 @@ def _validate(plan, out, say) -> tuple:
     (files written, failed shell runs as "validation/<condition>: error" lines)."""
     from tqdm import tqdm
 
-    from .. import units as U
     from ..io import atomic_write_text
     from ..rigid_ring import validation
     from ..validate import DEFAULT_CONDITIONS, validate

@@ -319,14 +319,22 @@ def write_characterization(path, char: Characterization) -> Path:
 def row_from_results(load_N: float, pressure_Pa: float, results, e10_signals: dict | None = None) -> ConditionRow:
     """One condition row from experiments' results: `results` is an iterable of result.json dicts
     (or ExperimentResult.to_json_dict()); their "quantities" are merged (known keys only; a later
-    result overrides an earlier one). e10_signals: the E10 signals dict (its CURVE_KEYS are kept;
+    result overrides an earlier one, except that a value from the quantity's own experiment, named by
+    the result's "study_id" (e.g. k_sv from E02, not E04's rest deflection), is never overridden). e10_signals: the E10 signals dict (its CURVE_KEYS are kept;
     M_z_SAE_Nm may come under aligning_moment_Nm)."""
     known = set(all_keys())
-    q = {}
+    source = {k: qq.experiment for qq in QUANTITIES for k in (qq.key, *(variant_keys(qq) if qq.damping else ()))}
+    q, from_source = {}, set()
     for res in results:
+        mine = res.get("study_id")  # a result of the quantity's own experiment wins over another's
         for k, v in (res.get("quantities") or {}).items():
             if k in known and (v is None or isinstance(v, (int, float))):
+                own = mine is not None and source.get(k) == mine
+                if k in from_source and not own:
+                    continue
                 q[k] = None if v is None else float(v)
+                if own:
+                    from_source.add(k)
     curves = None
     if e10_signals:
         s = dict(e10_signals)
