@@ -72,7 +72,7 @@ class _StepLimitedPath:
     def __init__(self, reach, tight_fails=False):
         self.b, self.reach, self.tight_fails, self.tries = 0.0, reach, tight_fails, []
 
-    def attempt(self, b1, name, loose=False, keep_failure=False):
+    def attempt(self, b1, name, loose=False, keep_failure=False, value=None):
         ok = abs(b1 - self.b) <= self.reach + 1e-12 and (loose or not self.tight_fails)
         self.tries.append((b1, loose, ok))
         if ok:

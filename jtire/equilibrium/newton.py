@@ -290,7 +290,7 @@ def initial_u(model, setup, y):
     return R.pack(y.x, y.q, b)
 
 
-def check_static(info: StaticInfo, where):
+def check_static(info: StaticInfo, where, hint: str = "try smaller load steps"):
     """Host-side verdict: raise SimulationError naming the load level when a solve did not converge.
 
     info may be batched (a load path): the first failed entry is named. `where`: a text, e.g.
@@ -307,4 +307,4 @@ def check_static(info: StaticInfo, where):
     raise SimulationError(
         f"{name}: static equilibrium not found after {int(pick(info.iterations))} Newton iterations: residual "
         f"{pick(info.residual_max):.3g} N above the tolerance {pick(info.tolerance):.3g} N "
-        f"(load scale {pick(info.load_scale):.4g} N); try smaller load steps")
+        f"(load scale {pick(info.load_scale):.4g} N); {hint}")

@@ -123,9 +123,11 @@ class Path:
         self.u, self.P, self.valid = None, None, jnp.asarray(False)
         self.height = jnp.asarray(FAR, jnp.float64)
         self.obs, self.infos, self.names = [], [], []
+        self.values = []  # the operating point of each level (a slip angle, a slip; nan: none)
 
-    def level(self, setup, name: str, loose: bool = False):
-        """Solve one more level; loose: to LOOSE only (a level on the way, a guess for the next)."""
+    def level(self, setup, name: str, loose: bool = False, value=float("nan")):
+        """Solve one more level; loose: to LOOSE only (a level on the way, a guess for the next); value:
+        its operating point (recorded in `values`, for naming a level that failed)."""
         from .newton import empty_factor
 
         if self.P is None:
@@ -141,21 +143,22 @@ class Path:
         self.obs.append(ob)
         self.infos.append(info)
         self.names.append(name)
+        self.values.append(float(value))
         return ob
 
-    def attempt(self, setup, name: str, loose: bool = False, keep_failure: bool = False):
+    def attempt(self, setup, name: str, loose: bool = False, keep_failure: bool = False, value=float("nan")):
         """(observations, ok): one more level, kept only if its Newton converged (ok True); a level that
         failed is dropped and the path restored to where it was (ok False), so that a continuation can
         retry with a smaller step (keep_failure: kept, for `check` to report). ok is None when the solve
         is traced (no host value to judge), and the level is kept as `level` keeps it."""
         saved = (self.u, self.P, self.valid)
-        ob = self.level(setup, name, loose)
+        ob = self.level(setup, name, loose, value)
         try:
             ok = bool(self.infos[-1].converged)
         except jax.errors.ConcretizationTypeError:
             return ob, None
         if not ok and not keep_failure:
-            del self.obs[-1], self.infos[-1], self.names[-1]
+            del self.obs[-1], self.infos[-1], self.names[-1], self.values[-1]
             self.u, self.P, self.valid = saved
         return ob, ok
 

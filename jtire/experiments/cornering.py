@@ -125,7 +125,8 @@ class Cornering(Rolling):
             obs = ST.slip_angle_sweep(path, self.slip_angles, self.speed, case.load, subpoints=self.subpoints)
             loaded = ST.stacked(path, range(n))
             return loaded | {"angles": jax.tree_util.tree_map(lambda *a: jnp.stack(a), *obs),
-                             "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"]}
+                             "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"],
+                             "sweep_values": jnp.asarray(path.values[n:] or [0.0])}
         return self.roll(model, params, case, case.aux[0])
 
     def _means(self, outputs, xp):
@@ -187,7 +188,8 @@ class Cornering(Rolling):
     def _reduce_steady(self, condition, out):
         load = condition["load_N"]
         checks, info = ST.summary(self.name, out["infos"], ST.level_names(self.load_levels))
-        sweep, _ = ST.summary(self.name, out["sweep_infos"], lambda k: f"slip-angle sweep, level {k + 1}")
+        sweep, _ = ST.summary(self.name, out["sweep_infos"], ST.sweep_name("slip angle", out["sweep_values"],
+                                                                          180 / np.pi, "deg"), ST.SWEEP_HINT)
         a = np.asarray(self.slip_angles)
         ang = jax.tree_util.tree_map(np.asarray, out["angles"])
         f, mz = ang["contact_force"], ang["contact_moment"][:, 2]

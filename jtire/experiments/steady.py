@@ -57,17 +57,27 @@ def stacked(path, indices=None) -> dict:
     return {"levels": stack(path.obs), "infos": stack(path.infos)}
 
 
+SWEEP_HINT = ("a smaller step did not help; a steady state may not exist there (docs/steady-rolling.md: what it "
+               "leaves out), or try method = \"transient\"")
+
+
+def sweep_name(kind, values, unit_factor, unit):
+    """Names of a sweep's levels from their operating points (`Path.values`): "slip angle 6 deg"."""
+    vals = np.asarray(values, float)
+    return lambda k: f"{kind} {unit_factor * vals[k]:.3g} {unit}" if k < len(vals) else f"{kind} sweep, level {k + 1}"
+
+
 def level_names(n_load: int) -> list:
     return ["inflation", "first contact"] + [f"load {k}/{n_load}" for k in range(1, n_load + 1)]
 
 
-def summary(where, infos, names) -> tuple:
+def summary(where, infos, names, hint: str = "try smaller load steps") -> tuple:
     """(checks, info) of solved levels (Newton infos stacked per level, host arrays) named `names` (a
     list, or a callable level index -> name); raises SimulationError naming the first level that did
     not converge."""
     infos = jax.tree_util.tree_map(np.asarray, infos)
     name = names if callable(names) else (lambda k: names[k])
-    EQ.check_static(infos, lambda k: f"{where}: steady rolling, {name(k)}")
+    EQ.check_static(infos, lambda k: f"{where}: steady rolling, {name(k)}", hint=hint)
     checks, info = static_summary(infos, method="steady")
     return checks, info | {"levels": int(len(infos.converged))}
 
@@ -131,7 +141,8 @@ def continue_to(path, setup_at, start, end, name_at, *, max_step, max_halvings=M
     while True:
         last = abs(end - b) <= abs(step) * (1 + 1e-9)
         b1 = end if last else b + step
-        ob, ok = path.attempt(setup_at(b1), name_at(b1), loose=not last, keep_failure=failures >= max_halvings)
+        ob, ok = path.attempt(setup_at(b1), name_at(b1), loose=not last, keep_failure=failures >= max_halvings,
+                              value=b1)
         failed = ok is not None and not ok
         if failed and failures < max_halvings:
             step, failures = step / 2, failures + 1
@@ -163,7 +174,7 @@ def slip_angle_sweep(path, angles, speed, load, *, subpoints, max_step=MAX_ANGLE
                 out[a] = failed
                 continue
             if a == prev:  # 0: the loaded state itself, solved once more at the sweep's tolerance
-                ob, ok = path.attempt(setup_at(a), "slip angle 0 deg", keep_failure=True)
+                ob, ok = path.attempt(setup_at(a), "slip angle 0 deg", keep_failure=True, value=a)
             else:
                 ob, ok = continue_to(path, setup_at, prev, a, lambda b: f"slip angle {np.degrees(b):.3g} deg",
                                      max_step=max_step)

@@ -174,12 +174,13 @@ class Traction(Experiment):
             failed = ob if ok is False else None
         out = ST.stacked(path, range(n))
         return out | {"slips": jax.tree_util.tree_map(lambda *a: jnp.stack(a), *obs), "a": 0.5 * (x_front - x_rear),
-                      "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"]}
+                      "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"],
+                      "sweep_values": jnp.asarray(path.values[n:] or [0.0])}
 
     def _reduce_steady(self, tire, condition, out):
         load, V = condition["load_N"], float(self.speed)
         checks, info = ST.summary(self.name, out["infos"], ST.level_names(self.load_levels))
-        ST.summary(self.name, out["sweep_infos"], lambda k: f"slip sweep, level {k + 1}")  # halved steps add levels
+        ST.summary(self.name, out["sweep_infos"], ST.sweep_name("slip", out["sweep_values"], 100, "%"), ST.SWEEP_HINT)
         sl = jax.tree_util.tree_map(np.asarray, out["slips"])
         kappa = np.asarray(self.slips)
         fx, fz, w = sl["contact_force"][:, 0], sl["contact_force"][:, 2], sl["omega"]
