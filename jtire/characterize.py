@@ -160,17 +160,23 @@ def run(plan: Plan, out, batch_size: int = 1, progress=None, on_case=None, execu
     return found
 
 
-def refined_cases(found: dict) -> list:
-    """One line per case that `batch.run` reran on a finer ring (its own discretization check failed
-    on the tire's mesh): which case, which ring and why. found: `run`'s {experiment: [result dicts]}."""
+def case_notes(found: dict) -> list:
+    """One line per case that finished with something a user must know: rerun by `batch.run` on a
+    finer ring (its own discretization check failed on the tire's mesh: which ring and why), or a
+    slip-angle sweep that stopped beyond its fit ranges (which angles are missing and why).
+    found: `run`'s {experiment: [result dicts]}."""
     lines = []
     for name, res in found.items():
         for r in res:
             info = (r or {}).get("info") or {}
+            c = (r or {}).get("condition") or {}
+            at = ((f"{c['load_N'] / U.G0:.1f} kg, " if "load_N" in c else "") + f"{c['pressure_Pa'] / U.PSI:.0f} psi"
+                  if "pressure_Pa" in c else "")
             if "refined_from_n_theta" in info:
-                c = r.get("condition") or {}
-                at = (f"{c['load_N'] / U.G0:.1f} kg, " if "load_N" in c else "") + f"{c['pressure_Pa'] / U.PSI:.0f} psi"
                 lines.append(f"{name} at {at}: rerun on {info['n_theta']} segments ({info['refined_because']})")
+            if "unsolved_slip_angles_deg" in info:
+                angles = ", ".join(f"{v:g}" for v in info["unsolved_slip_angles_deg"])
+                lines.append(f"{name} at {at}: slip angles {angles} deg not solved ({info['sweep_stopped']})")
     return lines
 
 

@@ -52,6 +52,57 @@ def test_reduce_cornering_known_slopes():
     np.testing.assert_allclose(curves["lateral_force_N"], lat, rtol=TOL_EXACT, atol=1e-6)
 
 
+def _steady_outputs(angles_deg, solved, k_f=2.5e5, k_m=8e3, load=45e3):
+    """What the steady E10's simulate returns, made up: loaded levels that converged, forces exactly
+    linear in the slip angle (F_y,ISO = k_f a, M_z,ISO = -k_m a), the sweep's levels one per angle,
+    those not `solved` failed (residual 50 N) and repeating the last observation, as the sweep does."""
+    from jtire.equilibrium import StaticInfo
+
+    a = np.radians(np.asarray(angles_deg, float))
+    n = len(a)
+
+    def infos(conv):
+        conv = np.asarray(conv, bool)
+        return StaticInfo(np.full(len(conv), 5), np.full(len(conv), 2), np.full(len(conv), 9),
+                          np.where(conv, 1e-3, 50.0), np.full(len(conv), 0.07), np.full(len(conv), 7e4), conv)
+
+    f = np.stack([np.zeros(n), k_f * a, np.full(n, load)], axis=1)
+    m = np.stack([np.zeros(n), np.zeros(n), -k_m * a], axis=1)
+    return {"infos": infos([True] * 4), "sweep_infos": infos(solved), "sweep_values": a,
+            "angles": {"contact_force": f, "contact_moment": m, "omega": np.full(n, 13.5)},
+            "angle_solved": np.asarray(solved, bool)}
+
+
+def test_steady_sweep_that_stops_beyond_the_fit_ranges(spec, protocol):
+    """A steady sweep whose Newton solve stops at 6 deg (the angles beyond repeat the failure): k_f and
+    k_m come from the solved angles (as from the whole sweep), the curve and signals hold only the solved
+    angles, the peak force is not reported (it may lie among the unsolved), and the result names the
+    missing angles and why. A stop inside a fit range (2 deg, in k_f's 0-2) is the case's error."""
+    from jtire.errors import SimulationError
+
+    from .conftest import make_experiment
+
+    deg = [0, 1, 2, 3, 4, 6, 8]
+    exp = make_experiment("cornering", protocol, spec, slip_angles_deg=deg, kf_range_deg=[0.0, 2.0],
+                          km_range_deg=[0.0, 3.0])
+    cond = {"pressure_Pa": 120 * 6894.757293168, "load_N": 45e3}
+    full = exp._reduce_steady(cond, _steady_outputs(deg, [True] * 7))
+    r = exp._reduce_steady(cond, _steady_outputs(deg, [True] * 5 + [False] * 2))
+    for k, v in (("k_f_N_per_rad", 2.5e5), ("k_m_Nm_per_rad", 8e3)):  # the road frame's cos(a): 0.1 %
+        assert r.quantities[k] == pytest.approx(full.quantities[k], rel=TOL_EXACT)
+        assert r.quantities[k] == pytest.approx(v, rel=1e-3)
+    assert r.quantities["peak_lateral_force_N"] is None
+    assert list(r.signals["slip_angle_deg"]) == pytest.approx([0, 1, 2, 3, 4])
+    assert r.info["unsolved_slip_angles_deg"] == pytest.approx([6.0, 8.0])
+    assert r.info["sweep_stopped"].startswith("slip angle 6 deg: not converged")
+    assert r.checks["sweep_converged"] and not r.checks["sweep_complete"]
+    assert full.checks["sweep_complete"] and "unsolved_slip_angles_deg" not in full.info
+    assert full.quantities["peak_lateral_force_N"] == pytest.approx(2.5e5 * np.radians(8) * np.cos(np.radians(8)),
+                                                                    rel=TOL_EXACT)
+    with pytest.raises(SimulationError, match="slip angle 2 deg"):
+        exp._reduce_steady(cond, _steady_outputs(deg, [True, True] + [False] * 5))
+
+
 def test_needs_three_angles_in_range_before_simulating():
     # (was a check of reduce_cornering; the angles are now checked when the experiment is built)
     with pytest.raises(ConfigError, match="need at least 3"):

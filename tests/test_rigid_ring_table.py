@@ -74,17 +74,21 @@ def test_row_takes_each_quantity_from_its_own_experiment():
     assert row_from_results(1.0, 1.0, [e04, {"quantities": {"k_sv_N_per_m": 1.3e6}}]).q["k_sv_N_per_m"] == 1.3e6
 
 
-def test_refined_cases_name_the_case_the_ring_and_the_reason():
-    """`characterize.refined_cases`: one line per case that batch.run reran on a finer ring, with the
-    condition in the config's units; a case without refinement, or failed (None), gives none."""
+def test_case_notes_name_the_case_and_what_happened():
+    """`characterize.case_notes`: one line per case that batch.run reran on a finer ring, or whose
+    slip-angle sweep stopped beyond its fit ranges, with the condition in the config's units; a plain
+    case, or a failed one (None), gives none."""
     from jtire import units as U
-    from jtire.characterize import refined_cases
+    from jtire.characterize import case_notes
 
     r = {"condition": {"load_N": 2312.5 * U.G0, "pressure_Pa": 150 * U.PSI},
          "info": {"n_theta": 128, "refined_from_n_theta": 64, "refined_because": "the hub drag ..."}}
+    e10 = {"condition": {"load_N": 6937.5 * U.G0, "pressure_Pa": 70 * U.PSI},
+           "info": {"unsolved_slip_angles_deg": [6.0, 8.0, 20.0], "sweep_stopped": "slip angle 6 deg: ..."}}
     plain = {"condition": {"pressure_Pa": 120 * U.PSI}, "info": {}}
-    assert refined_cases({"rolling_resistance": [r, None, plain]}) == [
-        "rolling_resistance at 2312.5 kg, 150 psi: rerun on 128 segments (the hub drag ...)"]
+    assert case_notes({"rolling_resistance": [r, None, plain], "cornering": [e10]}) == [
+        "rolling_resistance at 2312.5 kg, 150 psi: rerun on 128 segments (the hub drag ...)",
+        "cornering at 6937.5 kg, 70 psi: slip angles 6, 8, 20 deg not solved (slip angle 6 deg: ...)"]
 
 
 def test_missing_quantities_give_dashes_and_none(char):

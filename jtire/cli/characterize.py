@@ -58,7 +58,7 @@ def run_cli(args, say) -> int:
     for bar in bars:
         bar.close()
     walls["total_s"] = time.perf_counter() - t0
-    for line in ch.refined_cases(results):  # cases rerun on a finer ring (batch.run): which and why
+    for line in ch.case_notes(results):  # cases rerun on a finer ring, sweeps that stopped: which and why
         say(line)
     char = ch.characterization(plan, out, results)
     write_characterization(out, char)

@@ -39,6 +39,9 @@ def table_lines(res) -> list:
     if "refined_from_n_theta" in res.info:  # batch.run reran an under-resolved case on a finer ring
         lines.append(f"  {'ring':<{w}}  {res.info['n_theta']} segments (refined from {res.info['refined_from_n_theta']}: "
                      f"{res.info['refined_because']})")
+    if "unsolved_slip_angles_deg" in res.info:  # a sweep that stopped beyond its fit ranges
+        lines.append(f"  {'not solved':<{w}}  slip angles {_fmt(res.info['unsolved_slip_angles_deg'])} deg "
+                     f"({res.info['sweep_stopped']})")
     if method in ("static", "steady"):
         lines.append(f"  {'converged':<{w}}  {res.checks.get(method + '_converged')}   ({method}: "
                      f"{res.info.get('levels')} levels, {res.info.get('newton_iterations')} Newton iterations, "

@@ -122,9 +122,10 @@ class Cornering(Rolling):
         if self.method == "steady":
             path = self.loaded(model, params, case)
             n = len(path.obs)
-            obs = ST.slip_angle_sweep(path, self.slip_angles, self.speed, case.load, subpoints=self.subpoints)
+            obs, solved = ST.slip_angle_sweep(path, self.slip_angles, self.speed, case.load, subpoints=self.subpoints)
             loaded = ST.stacked(path, range(n))
             return loaded | {"angles": jax.tree_util.tree_map(lambda *a: jnp.stack(a), *obs),
+                             "angle_solved": jnp.asarray([s is not False for s in solved]),
                              "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"],
                              "sweep_values": jnp.asarray(path.values[n:] or [0.0])}
         return self.roll(model, params, case, case.aux[0])
@@ -188,26 +189,39 @@ class Cornering(Rolling):
     def _reduce_steady(self, condition, out):
         load = condition["load_N"]
         checks, info = ST.summary(self.name, out["infos"], ST.level_names(self.load_levels))
-        sweep, _ = ST.summary(self.name, out["sweep_infos"], ST.sweep_name("slip angle", out["sweep_values"],
-                                                                          180 / np.pi, "deg"), ST.SWEEP_HINT)
-        a = np.asarray(self.slip_angles)
-        ang = jax.tree_util.tree_map(np.asarray, out["angles"])
+        a_all = np.asarray(self.slip_angles)
+        solved = np.asarray(out["angle_solved"], bool)
+        sw = jax.tree_util.tree_map(np.asarray, out["sweep_infos"])
+        name = ST.sweep_name("slip angle", out["sweep_values"], 180 / np.pi, "deg")
+        stopped = None
+        in_fit = np.asarray(self.kf_mask, bool) | np.asarray(self.km_mask, bool)
+        if not solved.all() and (solved | ~in_fit).all():
+            # angles beyond the k_f and k_m ranges that Newton could not solve: the curve is reported without
+            # them (named in info and by `jtire run`); a failure inside the ranges is the case's error
+            k = int(np.argmin(sw.converged))
+            stopped = (f"{name(k)}: not converged after {int(sw.iterations[k])} Newton iterations (residual "
+                       f"{float(sw.residual_max[k]):.3g} N, tolerance {float(sw.tolerance[k]):.3g} N)")
+            sw = jax.tree_util.tree_map(lambda v: v[sw.converged], sw)
+        sweep, _ = ST.summary(self.name, sw, name, ST.SWEEP_HINT)
+        a = a_all[solved]
+        ang = jax.tree_util.tree_map(lambda v: np.asarray(v)[solved], out["angles"])
         f, mz = ang["contact_force"], ang["contact_moment"][:, 2]
         q, curves = reduce_cornering(a, f[:, 0], f[:, 1], mz, self.kf_range, self.km_range)
         lat = curves["lateral_force_N"]
-        q |= {"peak_lateral_force_N": float(np.max(np.abs(lat))),
-              "peak_lateral_force_over_load": float(np.max(np.abs(lat))) / load,
+        peak = float(np.max(np.abs(lat))) if stopped is None else None  # the peak may lie among the unsolved
+        q |= {"peak_lateral_force_N": peak, "peak_lateral_force_over_load": None if peak is None else peak / load,
               "speed_m_per_s": float(self.speed), "load_N": load}
         zero = np.zeros_like(a)
         sig = {"slip_angle_deg": np.degrees(a), "lateral_force_N": lat, "lateral_force_stderr_N": zero,
                "F_x_N": f[:, 0], "F_y_SAE_N": -f[:, 1], "M_z_SAE_Nm": curves["aligning_moment_Nm"],
                "M_z_stderr_Nm": zero, "F_z_N": f[:, 2], "spin_rad_per_s": ang["omega"], "F_y_drift_rel": zero}
-        sw = jax.tree_util.tree_map(np.asarray, out["sweep_infos"])
-        checks |= {"sweep_converged": sweep["steady_converged"],
+        checks |= {"sweep_converged": sweep["steady_converged"], "sweep_complete": stopped is None,
                    "max_vertical_force_vs_load_rel_error": float(np.max(np.abs(f[:, 2] - load)) / load)}
         info |= {"n_slip_angles": len(a), "levels": info["levels"] + int(len(sw.converged)),
                  "newton_iterations": info["newton_iterations"] + int(sw.iterations.sum()),
                  "steady_subpoints": self.subpoints}
+        if stopped is not None:
+            info |= {"unsolved_slip_angles_deg": [float(v) for v in np.degrees(a_all[~solved])], "sweep_stopped": stopped}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
 
 

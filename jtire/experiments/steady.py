@@ -157,29 +157,29 @@ def slip_angle_sweep(path, angles, speed, load, *, subpoints, max_step=MAX_ANGLE
     free-rolling state of `path` at 0: outwards through the positive angles, then again from 0 through
     the negative ones, in steps of at most `max_step`, halved where Newton fails (`continue_to`; the
     levels between are solved loosely, not reported). An angle that still fails ends its side of the
-    sweep: the angles beyond it repeat its observations, and the summary reports the failure. Returns
-    one observation dict per angle, in the order given."""
+    sweep: the angles beyond it repeat its observations. Returns (one observation dict per angle, one
+    flag per angle: solved (True), not (False), or None where traced), in the order given."""
     start = (path.u, path.P, path.valid)
 
     def setup_at(b):
         return ER.setup_of(path.pressure, path.road.surface(path.height, ER.road_velocity(speed, b)),
                            omega=path.q[4], rim_free=ER.LOADED, load=load, subpoints=subpoints)
 
-    out = {}
+    out, solved = {}, {}
     for sign in (1.0, -1.0):
         path.u, path.P, path.valid = start
         prev, failed = 0.0, None
         for a in sorted((float(v) for v in angles if v * sign > 0 or (v == 0 and sign > 0)), key=abs):
             if failed is not None:
-                out[a] = failed
+                out[a], solved[a] = failed, False
                 continue
             if a == prev:  # 0: the loaded state itself, solved once more at the sweep's tolerance
                 ob, ok = path.attempt(setup_at(a), "slip angle 0 deg", keep_failure=True, value=a)
             else:
                 ob, ok = continue_to(path, setup_at, prev, a, lambda b: f"slip angle {np.degrees(b):.3g} deg",
                                      max_step=max_step)
-            out[a] = ob
+            out[a], solved[a] = ob, ok
             if ok is False:
                 failed = ob
             prev = a
-    return [out[float(a)] for a in angles]
+    return [out[float(a)] for a in angles], [solved[float(a)] for a in angles]
