@@ -81,6 +81,7 @@ def _validate(plan, out, say) -> tuple:
     (files written, failed shell runs as "validation/<condition>: error" lines)."""
     from tqdm import tqdm
 
+    from .. import units as U
     from ..io import atomic_write_text
     from ..rigid_ring import validation
     from ..validate import DEFAULT_CONDITIONS, validate
