@@ -126,8 +126,7 @@ class Cornering(Rolling):
             loaded = ST.stacked(path, range(n))
             return loaded | {"angles": jax.tree_util.tree_map(lambda *a: jnp.stack(a), *obs),
                              "angle_solved": jnp.asarray([s is not False for s in solved]),
-                             "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"],
-                             "sweep_values": jnp.asarray(path.values[n:] or [0.0])}
+                             **ST.sweep_outputs(path, n)}
         return self.roll(model, params, case, case.aux[0])
 
     def _means(self, outputs, xp):

@@ -64,7 +64,13 @@ SWEEP_HINT = ("a smaller step did not help; a steady state may not exist there (
 def sweep_name(kind, values, unit_factor, unit):
     """Names of a sweep's levels from their operating points (`Path.values`): "slip angle 6 deg"."""
     vals = np.asarray(values, float)
-    return lambda k: f"{kind} {unit_factor * vals[k]:.3g} {unit}" if k < len(vals) else f"{kind} sweep, level {k + 1}"
+    return lambda k: f"{kind} {unit_factor * vals[k]:.3g} {unit}"
+
+
+def sweep_outputs(path, n: int) -> dict:
+    """The Newton infos and operating points of the path's levels from n on (a sweep's), for the
+    reduction: it names a failed level by its operating point (`sweep_name`)."""
+    return {"sweep_infos": stacked(path, range(n, len(path.obs)))["infos"], "sweep_values": jax.numpy.asarray(path.values[n:])}
 
 
 def level_names(n_load: int) -> list:
@@ -135,6 +141,8 @@ def continue_to(path, setup_at, start, end, name_at, *, max_step, max_halvings=M
     halved for the rest of the way; after `max_halvings` halvings a failed level is kept, for the
     summary to report. Returns (observations at `end`, converged: True, False,
     or None where the solve is traced and there is nothing to judge)."""
+    if end == start:  # the point itself solved again: no step to halve
+        max_halvings = 0
     n = max(1, int(np.ceil(abs(end - start) / max_step - 1e-9)))
     nominal = (end - start) / n
     b, step, failures = start, nominal, 0
@@ -152,13 +160,33 @@ def continue_to(path, setup_at, start, end, name_at, *, max_step, max_halvings=M
         b = b1
 
 
-def slip_angle_sweep(path, angles, speed, load, *, subpoints, max_step=MAX_ANGLE_STEP) -> list:
+def sweep_through(path, setup_at, start, points, name_at, *, max_step=None):
+    """Observations at each of `points` in turn, continued from `start` (solved already) by
+    `continue_to` (steps of at most max_step; None: one step per point). A point that still fails
+    ends the sweep: the points beyond it repeat its observations. Returns (observations, flags:
+    solved True, False, or None where traced), one per point."""
+    obs, solved, failed, prev = [], [], None, start
+    for p in points:
+        if failed is not None:
+            obs.append(failed)
+            solved.append(False)
+            continue
+        step = abs(p - prev) if max_step is None else max_step
+        ob, ok = continue_to(path, setup_at, prev, p, name_at, max_step=step if step > 0 else 1.0)
+        obs.append(ob)
+        solved.append(ok)
+        failed = ob if ok is False else None
+        prev = p
+    return obs, solved
+
+
+def slip_angle_sweep(path, angles, speed, load, *, subpoints, max_step=MAX_ANGLE_STEP) -> tuple:
     """Observations at each SAE slip angle of `angles` (rad, any order), continued from the loaded
     free-rolling state of `path` at 0: outwards through the positive angles, then again from 0 through
-    the negative ones, in steps of at most `max_step`, halved where Newton fails (`continue_to`; the
-    levels between are solved loosely, not reported). An angle that still fails ends its side of the
-    sweep: the angles beyond it repeat its observations. Returns (one observation dict per angle, one
-    flag per angle: solved (True), not (False), or None where traced), in the order given."""
+    the negative ones (`sweep_through`: steps of at most `max_step`, halved where Newton fails; the
+    levels between are solved loosely, not reported; a side stops at an angle that still fails).
+    Returns (one observation dict per angle, one flag per angle: solved True, False, or None where
+    traced), in the order given."""
     start = (path.u, path.P, path.valid)
 
     def setup_at(b):
@@ -168,18 +196,9 @@ def slip_angle_sweep(path, angles, speed, load, *, subpoints, max_step=MAX_ANGLE
     out, solved = {}, {}
     for sign in (1.0, -1.0):
         path.u, path.P, path.valid = start
-        prev, failed = 0.0, None
-        for a in sorted((float(v) for v in angles if v * sign > 0 or (v == 0 and sign > 0)), key=abs):
-            if failed is not None:
-                out[a], solved[a] = failed, False
-                continue
-            if a == prev:  # 0: the loaded state itself, solved once more at the sweep's tolerance
-                ob, ok = path.attempt(setup_at(a), "slip angle 0 deg", keep_failure=True, value=a)
-            else:
-                ob, ok = continue_to(path, setup_at, prev, a, lambda b: f"slip angle {np.degrees(b):.3g} deg",
-                                     max_step=max_step)
-            out[a], solved[a] = ob, ok
-            if ok is False:
-                failed = ob
-            prev = a
+        side = sorted((float(v) for v in angles if v * sign > 0 or (v == 0 and sign > 0)), key=abs)
+        obs, ok = sweep_through(path, setup_at, 0.0, side, lambda b: f"slip angle {np.degrees(b):.3g} deg",
+                                max_step=max_step)
+        out |= dict(zip(side, obs))
+        solved |= dict(zip(side, ok))
     return [out[float(a)] for a in angles], [solved[float(a)] for a in angles]

@@ -164,18 +164,10 @@ class Traction(Experiment):
             return ER.setup_of(case.pressure, surface, omega=(1 + k) * w_free, rim_free=ER.LOADED_SPIN_HELD,
                                load=case.load, subpoints=self.subpoints)
 
-        failed = None
-        for k0, k in zip(self.slips[:-1], self.slips[1:]):  # a failed step is retried in halves
-            if failed is not None:  # the slips beyond a failure repeat it; the summary reports it
-                obs.append(failed)
-                continue
-            ob, ok = ST.continue_to(path, setup_at, k0, k, lambda b: f"slip {100 * b:.3g} %", max_step=abs(k - k0))
-            obs.append(ob)
-            failed = ob if ok is False else None
+        obs += ST.sweep_through(path, setup_at, self.slips[0], self.slips[1:], lambda b: f"slip {100 * b:.3g} %")[0]
         out = ST.stacked(path, range(n))
         return out | {"slips": jax.tree_util.tree_map(lambda *a: jnp.stack(a), *obs), "a": 0.5 * (x_front - x_rear),
-                      "sweep_infos": ST.stacked(path, range(n, len(path.obs)))["infos"],
-                      "sweep_values": jnp.asarray(path.values[n:] or [0.0])}
+                      **ST.sweep_outputs(path, n)}
 
     def _reduce_steady(self, tire, condition, out):
         load, V = condition["load_N"], float(self.speed)
