@@ -54,7 +54,9 @@ def _case_by_case(exp, model, params, cases: Case, params_batched: bool, device:
     branches, so a vmapped solve costs several times an unbatched one even for one case
     (docs/design-notes.md). One compiled program serves any batch size."""
     n = jax.tree_util.tree_leaves(cases)[0].shape[0]
-    with jax.default_device(jax.devices()[device]):
+    # as for the vmapped batches: the context is part of a trace's key, and device 0 traces without it
+    # (a transient started from a static state then shares the phase program of the vmapped runs)
+    with jax.default_device(jax.devices()[device]) if device else contextlib.nullcontext():
         outs = [jax.device_get(exp.simulate(model, _index(params, i) if params_batched else params, _index(cases, i)))
                 for i in range(n)]
     return jax.tree_util.tree_map(lambda *a: np.stack(a), *outs)

@@ -212,13 +212,29 @@ def e09_static(runs, e01_static):
 
 @pytest.fixture(scope="session")
 def e09(runs, e01_grid):
-    """E09 with its release decay (0.15 s: ~5 periods of the ~30 Hz lateral mode)."""
+    """E09 as a transient throughout (inflate, load, lateral force settled by dynamic relaxation), with
+    its release decay (0.15 s: ~5 periods of the ~30 Hz lateral mode)."""
+    return runs("lateral_stiffness", [RATED], decay_s=0.15, method="transient")
+
+
+@pytest.fixture(scope="session")
+def e09_release(runs, e09_static):
+    """E09 as a user runs it with a decay (the default method): the static path, then the release
+    transient from the held static state."""
     return runs("lateral_stiffness", [RATED], decay_s=0.15)
 
 
 @pytest.fixture(scope="session")
-def e04(runs, e01_grid):
+def e04(runs, e01_static):
+    """E04 as a user runs it (the default method): inflation and rest as static equilibria (E01's
+    static program), the drop a transient from the inflated static state."""
     return runs("drop_test", [RATED], duration_s=0.25)
+
+
+@pytest.fixture(scope="session")
+def e04_transient(runs, e01_grid):
+    """E04 with every phase explicit: inflation and the rest after the drop by dynamic relaxation."""
+    return runs("drop_test", [RATED], duration_s=0.25, method="transient")
 
 
 E12_LOAD = 41.4e3  # N: the second calibration load (target 1701.11 N)
@@ -273,7 +289,14 @@ E03_TABLE = dict(drum_diameter_m=20.0, speed_kmh=30.0, roll_settle_s=0.05, recor
 
 @pytest.fixture(scope="session")
 def e03(runs):
+    """E03 as a user runs it: inflated and loaded onto the still drum in static levels, then rolled."""
     return runs("drum_cleat", [RATED], **E03_TABLE)
+
+
+@pytest.fixture(scope="session")
+def e03_transient(runs):
+    """E03 with the inflation and the loading by dynamic relaxation (method "transient")."""
+    return runs("drum_cleat", [RATED], method="transient", **E03_TABLE)
 
 
 SIDEWALL = ("inplane_rotation", "sidewall_translation", "sidewall_camber")
@@ -283,8 +306,15 @@ P_LOW = 80 * U.PSI
 
 @pytest.fixture(scope="session")
 def sidewall_runs(runs):
-    """{name: {pressure: Run}} at 120 and 80 psi (E05, E07, E08: per pressure, no load)."""
+    """{name: {pressure: Run}} at 120 and 80 psi (E05, E07, E08: per pressure, no load), the default
+    method: inflation and hold as static equilibria, the release a transient from the held state."""
     return {n: {p: runs(n, [{"pressure_Pa": p}], **SIDEWALL_DECAY) for p in (P_RATED, P_LOW)} for n in SIDEWALL}
+
+
+@pytest.fixture(scope="session")
+def sidewall_transient(runs):
+    """E07 at 120 psi with the inflation and the hold by dynamic relaxation (method "transient")."""
+    return runs("sidewall_translation", [{"pressure_Pa": P_RATED}], method="transient", **SIDEWALL_DECAY)
 
 
 @pytest.fixture(scope="session")

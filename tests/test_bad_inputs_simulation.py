@@ -128,10 +128,9 @@ CASES = [
     Case("run-frames-without-out", lambda t: ["run", _exp(t, FOOTPRINT), "--frames", "5"], "--frames: needs --out"),
     Case("run-method-unknown", lambda t: ["run", _exp(t, FOOTPRINT), "--set", 'footprint.method="implicit"'],
          "footprint.method = 'implicit': must be one of static, transient"),
-    Case("run-static-with-decay", lambda t: ["run", _exp(t, FOOTPRINT.replace('"footprint"', '"lateral_stiffness"')),
-                                             "--set", 'lateral_stiffness.method="static"',
-                                             "--set", "lateral_stiffness.decay_s=0.3"],
-         'lateral_stiffness.method = "static" with decay_s = 0.3: a static solve has no release decay'),
+    Case("run-drop-gravity-static", lambda t: ["run", _exp(t, FOOTPRINT.replace('"footprint"', '"drop_test"')),
+                                               "--set", "drop_test.gravity=true"],
+         'drop_test.gravity = true: the static levels carry no gravity', 'method = "transient"'),
     # ---- the command line itself -----------------------------------------------------------------
     Case("unknown-subcommand", lambda t: ["simulate"], "invalid choice: 'simulate'"),
     Case("no-subcommand", lambda t: [], "the following arguments are required: command"),

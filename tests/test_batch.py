@@ -75,14 +75,15 @@ def test_grid_traces_the_phase_program_once(e01_grid):
         assert e01_grid.traces_added == 1
 
 
-def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01_singles, e02, e09, e04, e12, e10,
-                                               sidewall_runs):
+def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01_singles, e02, e09, e04, e04_transient,
+                                               e09_release, e12, e10, sidewall_runs, sidewall_transient):
     """Every experiment, table, condition and batch size of one structure and placement shares one
     trace (and one compiled program per batch shape): only the first run of each group may trace (a
     weakly typed leaf, a drive field that is batched in one experiment and not in another, would show
-    here as a second trace)."""
-    runs = [e01_grid, e01_grid_unsharded, *e01_singles, e02, e09, e04, e12, e10,
-            *[r for n in SIDEWALL for r in sidewall_runs[n].values()]]
+    here as a second trace). A transient started from a static state (E04, E09's release, the rigid
+    belt's release: method "static") runs its phases on the same program, vmapped over its one case."""
+    runs = [e01_grid, e01_grid_unsharded, *e01_singles, e02, e09, e04, e04_transient, e09_release, e12, e10,
+            sidewall_transient, *[r for n in SIDEWALL for r in sidewall_runs[n].values()]]
     groups = {}
     for r in sorted(runs, key=lambda r: r.order):
         key = (r.exp.name in SIDEWALL, r.devices)
@@ -104,7 +105,7 @@ def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01
         cleared = rs[-1].clears[1] - rs[0].clears[0]
         assert rs[0].traces_added >= 1 or rs[0].traces_before > 0, (key, rs[0].exp.name)
         assert sum(r.traces_added for r in rs) <= (2 if after_sharded else 1) + cleared, (
-            key, first_sharded, [(r.exp.name, r.order, r.traces_added) for r in rs])
+            key, first_sharded, str([(r.exp.name, r.order, r.traces_added, r.exp.shardable) for r in rs if r.traces_added]))
 
 
 def test_program_traces_is_the_phase_program_count():

@@ -52,7 +52,7 @@ def test_drop_result(e04, spec):
     assert q["C_tot_Ns_per_m"] == pytest.approx(2 * q["xi_2p"] * np.sqrt(q["m_tot_kg"] * q["k_sv_N_per_m"]), rel=1e-12)
     assert c["drop_settle_work_J"] == 0.0  # the settle damping is off during the drop
     assert c["drop_rubber_dissipated_J"] > 0
-    assert c["settle_settled"]
+    assert res.info["method"] == "static" and c["static_converged"]
     assert c["static_contact_vs_load_rel_error"] < TOL_EQUILIBRIUM
     # the wheel went deeper than its static deflection on the first impact, and the k_sv
     # deflection is measured from first contact
@@ -135,8 +135,29 @@ def test_undamped_frictionless_drop_conserves_energy(coarse_tire, protocol, e01_
     assert abs(e1 - e0) < TOL_ENERGY * LOAD * d_max, (e1 - e0, LOAD * d_max)
 
 
-def test_lateral_release_decay(e09, spec):
-    res = ok(e09.results[0])
+# The drop from the inflated static state vs the drop from the dynamically settled inflation (E04,
+# coarse ring). The static inflation is the state the settled one approaches (its kinetic energy below
+# the protocol's 1e-3 J), so the two falls are the same motion to well under 1 %: 1 % on the fitted
+# damping and frequency. The rest position differs by the path (static load levels vs coming to rest
+# after the bounces, friction at the patch edges): 3 %, TOL_TWO_PATHS of test_static.py.
+TOL_DROP_START = 0.01
+
+
+def test_drop_from_the_static_state_agrees_with_the_transient(e04, e04_transient, e01_static):
+    s, t = ok(e04.results[0]), ok(e04_transient.results[0])
+    assert t.info["method"] == "transient" and t.checks["inflate_settled"] and t.checks["settle_settled"]
+    for k in ("xi_fit", "omega_n_fit_rad_per_s", "omega_n_2p_rad_per_s"):
+        assert s.quantities[k] == pytest.approx(t.quantities[k], rel=TOL_DROP_START), k
+    assert s.quantities["k_sv_N_per_m"] == pytest.approx(t.quantities["k_sv_N_per_m"], rel=0.03)
+    # the rest is E01's static load path: the same levels in the same program, the same deflection
+    assert s.quantities["static_deflection_m"] == pytest.approx(ok(e01_static.results[0]).quantities["deflection_m"],
+                                                                rel=1e-12)  # (- drop height + drop height: round-off)
+    assert s.info["steps"] < t.info["steps"]  # no explicit inflation, no settling after the drop
+
+
+@pytest.mark.parametrize("fixture", ["e09_release", "e09"])
+def test_lateral_release_decay(fixture, request, spec):
+    res = ok(request.getfixturevalue(fixture).results[0])
     q, c = res.quantities, res.checks
     assert np.isfinite(q["k_l_N_per_m"]) and q["k_l_N_per_m"] > 0
     for key in ("C_l_Ns_per_m", "C_l_2p_Ns_per_m", "C_l_fit_Ns_per_m", "xi_fit"):
@@ -164,3 +185,49 @@ def test_lateral_static_part(e09, sidewall_runs, e01_static, coarse_tire):
     k_by = ok(sidewall_runs["sidewall_translation"][P].results[0]).quantities["k_by_N_per_m"]
     k_tread = float(contact_patch(coarse_tire, e01_static)[1].sum())
     assert 0 < q["k_l_N_per_m"] < 1 / (1 / k_by + 1 / k_tread)
+
+
+# E09's release from the held static state vs from the settled transient (coarse ring): the static
+# k_l uses the long-term moduli (1 %, as tests/test_static.py); the free decay rings the same mode
+# from nearly the same held pose: the fitted damping ratio and frequency within 2 % (the transient's
+# Maxwell branches still carry part of the hold's stress when it is released).
+TOL_RELEASE_START = 0.02
+
+
+def test_lateral_release_from_the_static_state_agrees_with_the_transient(e09_release, e09):
+    s, t = ok(e09_release.results[0]), ok(e09.results[0])
+    assert s.info["method"] == "static" and s.checks["static_converged"]
+    assert s.quantities["k_l_N_per_m"] == pytest.approx(t.quantities["k_l_N_per_m"], rel=0.01)
+    for k in ("xi_fit", "omega_n_fit_rad_per_s"):
+        assert s.quantities[k] == pytest.approx(t.quantities[k], rel=TOL_RELEASE_START), k
+    assert s.info["steps"] < t.info["steps"]
+
+
+# Started from the held static state and NOT released, the explicit dynamics must stay where the
+# static solve left it: the static residual is the dynamic model's net force with the Maxwell branches
+# relaxed and the tread's shear carried. What is left is the solve's own tolerance (residual below
+# 1e-5 of the load scale), ringing at the structure's modes: the rim moves by less than 1e-3 of the
+# lateral deflection (7 mm) and the kinetic energy stays below 1e-3 J (the protocol's settled test).
+TOL_AT_REST_REL = 1e-3
+KE_AT_REST = 1e-3
+
+
+def test_the_static_state_is_at_rest_in_the_dynamics(e09_release, coarse_tire, protocol):
+    from jtire.experiments.loads import LEFT, RIM_YZ
+
+    m, params = coarse_tire.model, coarse_tire.params
+    out = ok(e09_release.results[0]).outputs[0]
+    st = out["static"]
+    case = Case.of(LOAD, P, out["dt"])
+    load = case.load * DOWN + float(e09_release.exp.force) * LEFT
+    hold = release_branch(case, surface=flat_road(float(np.asarray(st["road_height"])[-1])), load0=load, load1=load,
+                          rim_free=RIM_YZ, ramp=0.0, duration=0.02)
+    y0 = jax.tree_util.tree_map(jnp.asarray, st["y_lateral"])
+    outs, _, _ = run_plan(m, params, [hold], y0, {}, protocol.ke_tol, 64)
+    ph = phase(jax.device_get(outs), 0)
+    check_phase("hold", ph, m, require_settled=False)
+    q = np.asarray(ph.saved["q"])
+    y_ss = ok(e09_release.results[0]).quantities["lateral_deflection_m"]
+    drift = np.abs(q - np.asarray(st["lateral_q"])[-1]).max(axis=0)
+    assert drift[:3].max() < TOL_AT_REST_REL * y_ss, drift
+    assert np.asarray(ph.saved["ke"]).max() < KE_AT_REST

@@ -115,3 +115,16 @@ def test_a_coefficient_on_its_bound_is_named(nom):
     # the well-posed set ends on no bound
     assert mf.fit_pure_lateral(mf.curves_from_characterization(synthetic.characterization(pressures_psi=(120.0,))),
                                nom).at_bound == ()
+
+
+def test_error_range_names_a_curve_that_ends_sooner(char, nom):
+    """A steady E10 sweep that stopped beyond its fit ranges leaves a shorter curve: the fit's error
+    range says so for that condition instead of claiming the whole 0-8 deg."""
+    data = mf.curves_from_characterization(char, pressures=[nom.nompres])
+    assert mf.fit_pure_lateral(data, nom).range_text() == "0-8 deg"
+    d = data[-1]
+    keep = np.abs(d.alpha_deg) <= 4.0 + 1e-9
+    short = data[:-1] + [mf.CurveData(d.fz, d.p, d.alpha_deg[keep], d.fy[keep], d.mz[keep])]
+    r = mf.fit_pure_lateral(short, nom)
+    assert r.reach_deg[:-1] == (8.0,) * (len(data) - 1) and r.reach_deg[-1] == 4.0
+    assert r.range_text() == f"0-8 deg (0-4 deg at {d.fz / 1e3:.4g} kN, {d.p / 1e3:.0f} kPa: the curve ends there)"

@@ -28,6 +28,10 @@ TOL_XI_UNDAMPED_FIT = 1e-3  # symplectic Euler has no numerical dissipation (a d
 TOL_XI_UNDAMPED_2P = 2e-3  # two peaks also see the beating of the sidewall modes (measured ~1e-3)
 TOL_SDOF = 0.10  # k_own_mass*omega^2 vs static k: sidewall mass share and viscoelastic stiffening, a few % each
 TOL_CROSS = 1e-9  # m or rad: motion off the loaded axis vanishes by the tire's mirror symmetry
+# ... to round-off in the settled transient; in a static solve to the Newton tolerance: the iterate's
+# off-axis part is bounded by the residual left (RTOL of the load scale) over the belt's stiffness
+# (~1e6 N/m, N m/rad): a few 1e-9 (measured 1.2e-9 m on E05 at 120 psi)
+TOL_CROSS_STATIC = 1e-8
 OWN_AXIS = {"inplane_rotation": 4, "sidewall_translation": 1, "sidewall_camber": 3,
             "sidewall_longitudinal": 0}  # index in (disp, rot)
 # E13 pushed fore-aft vs pushed vertically: without a road the ring is axisymmetric, and the 32-segment
@@ -35,6 +39,11 @@ OWN_AXIS = {"inplane_rotation": 4, "sidewall_translation": 1, "sidewall_camber":
 # rotated and differ by round-off only (measured 1.3e-13 on k_bx, 2.4e-12 on C_bx)
 TOL_AXISYM_K = 1e-9
 TOL_AXISYM_C = 1e-8
+# ... and with the held state from a static solve (the default), to the Newton tolerance: each push is
+# solved to a residual below RTOL = 1e-6 of the load scale, by iterations that are not the same
+# rotated (the banded preconditioner orders the unknowns by segment), so x_ss agrees to ~1e-6 of
+# itself (measured 5.4e-8 on k_bx); the release then rings from that pose
+TOL_AXISYM_STATIC = 1e-6
 
 
 @pytest.fixture(scope="module")
@@ -52,6 +61,20 @@ def pose(out, i):
     return np.concatenate([np.asarray(ph.saved["belt_disp"])[k], np.asarray(ph.saved["belt_rot"])[k]])
 
 
+def held_motion(out):
+    """(6,) belt motion from the inflated to the held pose, either method: the static levels' poses
+    (method "static"), or the last samples of the inflate and hold phases (method "transient")."""
+    if "poses" in out:
+        p = np.asarray(out["poses"]).reshape(2, 6)
+        return p[1] - p[0]
+    return pose(out, 1) - pose(out, 0)
+
+
+def release(out):
+    """The release phase (the only phase of the static method, the third of the transient one)."""
+    return phase(out["phases"], 0 if "poses" in out else 2)
+
+
 def belt_rigidity_error(model, y) -> float:
     """Largest change (m) of any distance between two belt nodes from the reference shape to state y
     (the belt is rigid from the start, through the inflation too)."""
@@ -66,12 +89,38 @@ def belt_rigidity_error(model, y) -> float:
     return float(np.abs(da - db).max())
 
 
-def test_every_phase_settled(sidewall_runs):
+def test_every_stage_converged(sidewall_runs, sidewall_transient):
+    """The default method's inflation and hold are static levels solved to the solver's tolerance; a
+    rigid belt keeps its radius (the load's lever arm, taken at rest) through the inflation to
+    round-off; the transient method's phases settle."""
     for name in SIDEWALL:
         for p, run in sidewall_runs[name].items():
-            c = ok(run.results[0]).checks
-            assert c["inflate_settled"] and c["hold_settled"], (name, p)
+            res = ok(run.results[0])
+            c = res.checks
+            assert res.info["method"] == "static" and c["static_converged"], (name, p)
+            assert c["static_residual_max_rel"] < 1e-5, (name, p)
+            assert c["belt_radius_inflated_rel_change"] < 1e-9, (name, p, c["belt_radius_inflated_rel_change"])
             assert not c["release_blew_up"], (name, p)
+    c = ok(sidewall_transient.results[0]).checks
+    assert c["inflate_settled"] and c["hold_settled"] and not c["release_blew_up"]
+
+
+# Static hold vs the settled transient hold (E07, coarse ring). The static solve uses the long-term
+# moduli; the transient hold settles (kinetic energy below the protocol's tolerance) with the Maxwell
+# branches not fully relaxed, so it is stiffer by a fraction of the branches' share: the static k_by
+# is below it, within 2 %. The release rings the same belt mode from (nearly) the same held pose: its
+# fitted damping agrees within 2 % (the transient's branches still hold some of the hold's stress).
+TOL_HOLD_K = 0.02
+TOL_HOLD_C = 0.02
+
+
+def test_static_hold_agrees_with_the_settled_transient(sidewall_runs, sidewall_transient):
+    s = ok(sidewall_runs["sidewall_translation"][P_RATED].results[0]).quantities
+    t = ok(sidewall_transient.results[0]).quantities
+    assert s["k_by_N_per_m"] == pytest.approx(t["k_by_N_per_m"], rel=TOL_HOLD_K)
+    assert s["k_by_N_per_m"] <= t["k_by_N_per_m"] * (1 + 1e-6)
+    assert s["C_by_fit_Ns_per_m"] == pytest.approx(t["C_by_fit_Ns_per_m"], rel=TOL_HOLD_C)
+    assert s["omega_n_fit_rad_per_s"] == pytest.approx(t["omega_n_fit_rad_per_s"], rel=TOL_HOLD_C)
 
 
 @pytest.mark.parametrize("name", SIDEWALL)
@@ -87,16 +136,17 @@ def test_stiffness_positive_and_rises_with_pressure(sidewall_runs, name):
 @pytest.mark.parametrize("name", SIDEWALL)
 def test_load_moves_only_its_own_axis(sidewall_runs, name):
     out = ok(sidewall_runs[name][P_RATED].results[0]).outputs[0]
-    motion = pose(out, 1) - pose(out, 0)  # held - inflated
+    motion = held_motion(out)
     own = OWN_AXIS[name]
     assert abs(motion[own]) > 1e-4
     motion[own] = 0.0
-    assert np.abs(motion).max() < TOL_CROSS, motion
+    assert np.abs(motion).max() < (TOL_CROSS_STATIC if "poses" in out else TOL_CROSS), motion
 
 
 @pytest.mark.parametrize("name", SIDEWALL)
 def test_belt_stays_rigid(coarse_tire, sidewall_runs, undamped, name):
-    """Through inflation, hold and the free release. The hold leaves < TOL_RIGID_M; in a free
+    """Through inflation, hold and the free release. The hold leaves < TOL_RIGID_M (the static levels
+    place the belt as one rigid body exactly; the settled transient hold drifts); in a free
     rotation the explicit rigid-body update changes distances by at most (h w)^2 * 2r per step, so the
     release adds at most n_steps (h w_max)^2 2 r, w_max from the recorded rotation (measured ~4e-6 m vs
     ~2e-5 m on E05; zero for the translation of E07)."""
@@ -104,7 +154,7 @@ def test_belt_stays_rigid(coarse_tire, sidewall_runs, undamped, name):
     for run in [sidewall_runs[name][P_RATED]] + ([undamped[name]] if name in undamped else []):
         res = ok(run.results[0])
         out = res.outputs[0]
-        rel = phase(out["phases"], 2)
+        rel = release(out)
         ts = np.linspace(float(rel.t0), float(rel.t0) + SIDEWALL_DECAY["decay_s"], len(rel.saved["ke"]))
         rot = np.asarray(rel.saved["belt_rot"])
         w_max = np.abs(np.diff(rot, axis=0) / np.diff(ts)[:, None]).max()
@@ -224,14 +274,16 @@ def test_fore_aft_spring_is_the_vertical_spring(e13_runs, spec):
     assert x.info["direction"] == "x" and z.info["direction"] == "z"
     kx, kz = x.quantities["k_bx_N_per_m"], z.quantities["k_bx_N_per_m"]
     assert np.isfinite(kx) and kx > 0
-    assert kx == pytest.approx(kz, rel=TOL_AXISYM_K), (kx, kz)
-    assert x.quantities["C_bx_Ns_per_m"] == pytest.approx(z.quantities["C_bx_Ns_per_m"], rel=TOL_AXISYM_C)
+    static = x.info["method"] == "static"
+    assert kx == pytest.approx(kz, rel=TOL_AXISYM_STATIC if static else TOL_AXISYM_K), (kx, kz)
+    assert x.quantities["C_bx_Ns_per_m"] == pytest.approx(z.quantities["C_bx_Ns_per_m"],
+                                                          rel=TOL_AXISYM_STATIC if static else TOL_AXISYM_C)
     for res, axis in ((x, 0), (z, 2)):
         out = res.outputs[0]
-        motion = pose(out, 1) - pose(out, 0)
+        motion = held_motion(out)
         assert abs(motion[axis]) > 1e-4
         motion[axis] = 0.0
-        assert np.abs(motion).max() < TOL_CROSS, motion
+        assert np.abs(motion).max() < (TOL_CROSS_STATIC if "poses" in out else TOL_CROSS), motion
         assert abs(res.checks["k_dynamic_vs_static_rel"]) < TOL_SDOF
     assert x.quantities["decay_mass_kg"] == pytest.approx(spec.masses.belt, rel=1e-12)
     assert x.quantities["load_N"] == pytest.approx(2 * 2e3)

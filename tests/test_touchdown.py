@@ -21,7 +21,7 @@ def test_one_metre_per_second_touchdown_at_rated_load(tmp_path, capsys):
                  "--out", str(tmp_path / "drop")]) == 0
     d = json.loads((tmp_path / "drop" / "result.json").read_text())
     c = d["checks"]
-    assert c["inflate_settled"] and c["settle_settled"]
+    assert c["static_converged"]  # inflation and the rest under the load: static equilibria
     assert c["static_contact_vs_load_rel_error"] < 0.01  # at rest again, the road carries the load
     assert 0 < c["max_deflection_m"] < 0.1  # it landed and rebounded, no tunnelling through the road
     assert d["quantities"]["C_tot_Ns_per_m"] > 0

@@ -43,8 +43,10 @@ def table_lines(res) -> list:
         lines.append(f"  {'not solved':<{w}}  slip angles {_fmt(res.info['unsolved_slip_angles_deg'])} deg "
                      f"({res.info['sweep_stopped']})")
     if method in ("static", "steady"):
+        then = (f", then {res.info['steps']} explicit steps at dt {res.info.get('dt_s', float('nan')):.3g} s"
+                if "steps" in res.info else "")  # a transient started from the static state (a release)
         lines.append(f"  {'converged':<{w}}  {res.checks.get(method + '_converged')}   ({method}: "
-                     f"{res.info.get('levels')} levels, {res.info.get('newton_iterations')} Newton iterations, "
+                     f"{res.info.get('levels')} levels, {res.info.get('newton_iterations')} Newton iterations{then}, "
                      f"{res.info.get('wall_s', 0):.1f} s wall incl. compile)")
         return lines
     settled = all(v for k, v in res.checks.items() if k.endswith("_settled"))

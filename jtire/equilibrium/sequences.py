@@ -156,12 +156,19 @@ class Path(eqx.Module):
     road_height: jax.Array
 
 
-def run_levels(model, params, y0, levels: Levels, *, rigid_belt=False, opts=NewtonOptions(), road0=FAR):
+def flat_road_at(h):
+    """The default surface of a level: a still flat road at height h (m)."""
+    return FlatRoad(height=h, velocity=jnp.zeros(3))
+
+
+def run_levels(model, params, y0, levels: Levels, *, rigid_belt=False, opts=NewtonOptions(), road0=FAR,
+               surface_at=flat_road_at):
     """Solve the levels in order from state y0 (a TireState). Returns a Path.
 
-    The last factorization of each level preconditions the next (see `newton`)."""
+    surface_at(h) -> the surface whose top is at height h (m): a flat road (default), or e.g. a still
+    drum (E03). The last factorization of each level preconditions the next (see `newton`)."""
     def setup_for(lv, y, h):
-        road = FlatRoad(height=h, velocity=jnp.zeros(3))
+        road = surface_at(h)
         return R.make_setup(lv.pressure, rim_force=lv.rim_force, rim_free=lv.rim_free, rim_position=lv.rim_position,
                             surface=road, anchors=anchors_of(model, y, road), friction_on=lv.friction_on,
                             belt_load=lv.belt_load if rigid_belt else None, rigid_belt=rigid_belt)
@@ -185,8 +192,10 @@ def run_levels(model, params, y0, levels: Levels, *, rigid_belt=False, opts=Newt
     return Path(*out)
 
 
-def static_path(model, params, pressure, *parts: Levels, rigid_belt=False, opts=NewtonOptions()):
-    """Inflation from the tire at rest, then `parts` (Levels), in one scan. Returns a Path whose
-    level 0 is the inflated state."""
+def static_path(model, params, pressure, *parts: Levels, rigid_belt=False, opts=NewtonOptions(),
+                surface_at=flat_road_at):
+    """Inflation from the tire at rest, then `parts` (Levels), in one scan, on the surfaces
+    `surface_at(h)` (`run_levels`). Returns a Path whose level 0 is the inflated state."""
     y0 = TireState.at_rest(model, len(params.relaxation_times))
-    return run_levels(model, params, y0, concat(inflate_levels(pressure), *parts), rigid_belt=rigid_belt, opts=opts)
+    return run_levels(model, params, y0, concat(inflate_levels(pressure), *parts), rigid_belt=rigid_belt, opts=opts,
+                      surface_at=surface_at)

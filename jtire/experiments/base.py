@@ -55,8 +55,9 @@ class Experiment(eqx.Module):
         solves may not: their Newton loops end after a different number of iterations on each device, and the
         partitioned program then deadlocks on CPU host devices (docs/design-notes.md); `batch.run` runs
         them case by case, unbatched, on one device (a vmapped Newton loop runs both branches of its
-        conditionals)."""
-        return self.time_stepped
+        conditionals). A transient started from a static state (method "static" with a release) holds
+        a Newton solve too."""
+        return self.time_stepped and getattr(self, "method", "transient") not in ("static", "steady")
 
     @property
     def time_stepped(self) -> bool:

@@ -12,6 +12,12 @@ Phases (every one on the same surface type, drum + cleat):
    loaded patch on the drum, `patch.extent_traced`); the free response after the cleat has left the
    contact patch is recorded at `sample_rate`.
 
+Method "static" (the default): phases 1 and 2 are static equilibria on the still drum (`static_path`:
+inflation, first contact, 13 load levels to the condition's load, long-term moduli, friction carried
+from level to level), and the run starts at phase 3 from that state. Method "transient": phases 1 and
+2 by dynamic relaxation (settle damping on, settled when the kinetic energy is below the protocol's
+tolerance).
+
 Axle force: the tire's force on the rim (`tire_on_rim`, what a hub dynamometer reads), exact with
 every node's inertia in it. The spectra of the drum's force on the tire and of the belt's vertical
 displacement are reported beside it: a mode has one frequency whatever the output, but each output
@@ -28,6 +34,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import equilibrium as EQ
 from .. import spectra
 from .. import units as U
 from ..errors import ConfigError
@@ -38,8 +45,10 @@ from .base import Experiment
 from .loads import DOWN, RIM_SPIN, RIM_Z
 from .patch import surface_gap, x_range_traced
 from .phases import first_contact_height, make_drive, with_spin
-from .program import Phase, check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info, run_plan
+from .program import (Phase, check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info, run_plan,
+                      run_plan_vmapped)
 from .result import ExperimentResult
+from .static_path import STATIC_LOADS, static_summary
 
 CROSS_ALLOWANCE = 0.06  # s: room in the impact phase for the cleat to cross the patch (2a + cleat < 0.8 m at 50 km/h)
 
@@ -49,6 +58,15 @@ def drum_at(radius, top_z, surface_speed=0.0):
     `surface_speed` (m/s; > 0: the top moves towards -x, so a tire on it rolls forward). Traced."""
     r = f64(radius)
     return Drum(radius=r, centre_x=f64(0.0), centre_z=f64(top_z) - r, omega=-f64(surface_speed) / r)
+
+
+def _drum_path(model, params, pressure, loads, drum_radius, cleat_radius, cleat_height):
+    """Inflation, first contact and the vertical loads `loads` (N) as static levels on the still drum,
+    its cleat at the bottom (out of reach): a Path (`static_path`)."""
+    def surface_at(h):
+        return with_cleat(drum_at(drum_radius, h), cleat_radius, cleat_height, jnp.pi, 0.0)
+
+    return EQ.static_path(model, params, pressure, EQ.vertical_levels(pressure, loads), surface_at=surface_at)
 
 
 def with_cleat(d: Drum, radius, height, phi_at, t_at):
@@ -75,6 +93,7 @@ class DrumCleat(Experiment):
         "sample_rate_Hz": Field(float, 1, 500, 20000, 4000.0, "Hz"),
         "f_band_Hz": Field(list, 1, 0, 10000, [20.0, 200.0], "Hz"),
         "pad_resolution_Hz": Field(float, 1, 1e-4, 0.2, 0.01, "Hz"),
+        "method": Field(str, default="static", choices=("static", "transient")),
     }
     traced_names = ()
     quantity_names = ("first_mode_Hz", "k_dv_N_per_m", "first_mode_fit_fn_Hz", "k_dv_fit_N_per_m", "first_mode_fit_fd_Hz",
@@ -93,6 +112,11 @@ class DrumCleat(Experiment):
     f_band: tuple = eqx.field(static=True)
     pad_resolution: float = eqx.field(static=True)
     n_save: int = eqx.field(static=True)
+    method: str = eqx.field(static=True, default="static")  # inflation and loading: "static" or "transient"
+
+    @property
+    def time_stepped(self) -> bool:
+        return True  # the rolling and the impact are transients whichever way the loaded state was reached
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):
@@ -113,7 +137,8 @@ class DrumCleat(Experiment):
         return cls(proto=proto, drum_radius=f64(r_d), speed=f64(v), cleat_radius=f64(r_c), cleat_height=f64(h_c),
                    roll_settle=f64(table["roll_settle_s"]), lead_time=f64(table["lead_time_s"]),
                    record=float(table["record_s"]), sample_rate=float(fs), f_band=(lo, hi),
-                   pad_resolution=float(table["pad_resolution_Hz"]), n_save=int(round(t_imp * fs)) + 1)
+                   pad_resolution=float(table["pad_resolution_Hz"]), n_save=int(round(t_imp * fs)) + 1,
+                   method=table["method"])
 
     def t_impact(self):
         return self.lead_time + CROSS_ALLOWANCE + self.record
@@ -121,65 +146,96 @@ class DrumCleat(Experiment):
     def simulate(self, model, params, case):
         proto = self.proto
         R_d, r_c, h_c, V = self.drum_radius, self.cleat_radius, self.cleat_height, self.speed
-        f_rim = case.load * DOWN
 
-        def inflate(y, t, mem):
-            far = with_cleat(drum_at(R_d, -10.0), r_c, h_c, jnp.pi, t)
-            d = make_drive(case.pressure, case.dt, pressure0=0.0, t0=t, t1=t + proto.inflate_ramp, surface=far,
-                           damping=proto.settle_damping)
-            return Phase(d, y, proto.inflate_max, proto.inflate_ramp), mem
+        def branches(case):
+            """inflate, load, roll, impact: the phases of `case` (traced)."""
+            f_rim = case.load * DOWN
 
-        def load(y, t, mem):
-            z_top = first_contact_height(model, y)
-            mem = dict(mem, z_top=z_top)
-            still = with_cleat(drum_at(R_d, z_top), r_c, h_c, jnp.pi, t)
-            d = make_drive(case.pressure, case.dt, force1=f_rim, t0=t, t1=t + proto.load_ramp, rim_free=RIM_Z,
-                           surface=still, damping=proto.settle_damping)
-            return Phase(d, y, proto.load_ramp + proto.settle_max, proto.load_ramp), mem
+            def inflate(y, t, mem):
+                far = with_cleat(drum_at(R_d, -10.0), r_c, h_c, jnp.pi, t)
+                d = make_drive(case.pressure, case.dt, pressure0=0.0, t0=t, t1=t + proto.inflate_ramp, surface=far,
+                               damping=proto.settle_damping)
+                return Phase(d, y, proto.inflate_max, proto.inflate_ramp), mem
 
-        def roll(y, t, mem):
-            z_top = mem["z_top"]
-            R0 = -z_top  # inflated outer radius (rim centre at the origin)
-            x_rear, x_front = x_range_traced(model, y, surface_gap(drum_at(R_d, z_top)))
-            # where the cleat first touches the tire: the tread leaves the drum as a parabola of relative
-            # curvature 1/R0 + 1/R_d, so a cleat of height h reaches it sqrt(2 h / k) beyond the patch edge,
-            # plus the cleat's own half chord
-            reach = jnp.sqrt(2 * h_c / (1 / R0 + 1 / R_d)) + jnp.sqrt(jnp.maximum(r_c**2 - (r_c - h_c) ** 2, 0.0))
-            orbit = R_d + h_c - r_c
-            phi_touch = jnp.arcsin(jnp.minimum((x_front + reach) / orbit, 1.0))
-            phi_leave = jnp.arcsin(jnp.maximum((x_rear - reach) / orbit, -1.0))
-            omega_d = V / R_d
-            phi_imp = phi_touch + omega_d * self.lead_time  # cleat angle at the start of the impact phase
-            mem = dict(mem, phi_imp=phi_imp, phi_leave=phi_leave, a=0.5 * (x_front - x_rear), defl=-y.q[2])
-            surf = with_cleat(drum_at(R_d, z_top, V), r_c, h_c, phi_imp + omega_d * self.roll_settle, t)
-            d = make_drive(case.pressure, case.dt, force0=f_rim, force1=f_rim, rim_free=RIM_SPIN, surface=surf,
-                           damping=proto.settle_damping, rim_frame=1.0)
-            y = with_spin(y, V / (R0 + y.q[2] / 3))
-            return Phase(d, y, self.roll_settle, jnp.inf), mem
+            def load(y, t, mem):
+                z_top = first_contact_height(model, y)
+                mem = dict(mem, z_top=z_top)
+                still = with_cleat(drum_at(R_d, z_top), r_c, h_c, jnp.pi, t)
+                d = make_drive(case.pressure, case.dt, force1=f_rim, t0=t, t1=t + proto.load_ramp, rim_free=RIM_Z,
+                               surface=still, damping=proto.settle_damping)
+                return Phase(d, y, proto.load_ramp + proto.settle_max, proto.load_ramp), mem
 
-        def impact(y, t, mem):
-            surf = with_cleat(drum_at(R_d, mem["z_top"], V), r_c, h_c, mem["phi_imp"], t)
-            d = make_drive(case.pressure, case.dt, force0=f_rim, force1=f_rim, rim_free=RIM_SPIN, surface=surf,
-                           damping=0.0, rim_frame=1.0)
-            mem = dict(mem, t_imp0=t)
-            return Phase(d, y, self.t_impact(), jnp.inf), mem
+            def roll(y, t, mem):
+                z_top = mem["z_top"]
+                R0 = -z_top  # inflated outer radius (rim centre at the origin)
+                x_rear, x_front = x_range_traced(model, y, surface_gap(drum_at(R_d, z_top)))
+                # where the cleat first touches the tire: the tread leaves the drum as a parabola of relative
+                # curvature 1/R0 + 1/R_d, so a cleat of height h reaches it sqrt(2 h / k) beyond the patch edge,
+                # plus the cleat's own half chord
+                reach = jnp.sqrt(2 * h_c / (1 / R0 + 1 / R_d)) + jnp.sqrt(jnp.maximum(r_c**2 - (r_c - h_c) ** 2, 0.0))
+                orbit = R_d + h_c - r_c
+                phi_touch = jnp.arcsin(jnp.minimum((x_front + reach) / orbit, 1.0))
+                phi_leave = jnp.arcsin(jnp.maximum((x_rear - reach) / orbit, -1.0))
+                omega_d = V / R_d
+                phi_imp = phi_touch + omega_d * self.lead_time  # cleat angle at the start of the impact phase
+                mem = dict(mem, phi_imp=phi_imp, phi_leave=phi_leave, a=0.5 * (x_front - x_rear), defl=-y.q[2])
+                surf = with_cleat(drum_at(R_d, z_top, V), r_c, h_c, phi_imp + omega_d * self.roll_settle, t)
+                d = make_drive(case.pressure, case.dt, force0=f_rim, force1=f_rim, rim_free=RIM_SPIN, surface=surf,
+                               damping=proto.settle_damping, rim_frame=1.0)
+                y = with_spin(y, V / (R0 + y.q[2] / 3))
+                return Phase(d, y, self.roll_settle, jnp.inf), mem
 
-        y0 = TireState.at_rest(model, len(params.relaxation_times))
+            def impact(y, t, mem):
+                surf = with_cleat(drum_at(R_d, mem["z_top"], V), r_c, h_c, mem["phi_imp"], t)
+                d = make_drive(case.pressure, case.dt, force0=f_rim, force1=f_rim, rim_free=RIM_SPIN, surface=surf,
+                               damping=0.0, rim_frame=1.0)
+                mem = dict(mem, t_imp0=t)
+                return Phase(d, y, self.t_impact(), jnp.inf), mem
+
+            return [inflate, load, roll, impact]
+
         mem0 = {k: 0.0 for k in ("z_top", "phi_imp", "phi_leave", "a", "defl", "t_imp0")}
-        outs, y, mem = run_plan(model, params, [inflate, load, roll, impact], y0, mem0, proto.ke_tol, self.n_save)
+        if self.method == "static":
+            loads = case.load * jnp.arange(1, STATIC_LOADS + 1) / STATIC_LOADS
+            path = _drum_path_jit(model, params, case.pressure, loads, R_d, r_c, h_c)
+            loaded = jax.tree_util.tree_map(lambda a: a[-1], path.ys)
+            mem0["z_top"] = path.road_height[-1]
+            outs, _, mem = run_plan_vmapped(model, params, lambda c: branches(c)[2:], case, loaded, mem0, proto.ke_tol,
+                                            self.n_save)
+            return {"phases": outs, "mem": mem, "static_infos": path.infos, "static_contact": path.contact[-1],
+                    "static_loads": loads}
+        y0 = TireState.at_rest(model, len(params.relaxation_times))
+        outs, y, mem = run_plan(model, params, branches(case), y0, mem0, proto.ke_tol, self.n_save)
         return {"phases": outs, "mem": mem}
 
-    def reduce(self, tire, condition, outputs):
-        out = outputs[0]
-        model, load = tire.model, condition["load_N"]
+    def _loaded(self, out, model, load):
+        """(the roll and impact phases, checks, info) after checking how the loaded state was reached."""
+        if self.method == "static":
+            loads = np.asarray(out["static_loads"])
+            EQ.check_static(out["static_infos"], lambda k: "drum_cleat: " + (
+                "inflation" if k == 0 else "first contact" if k == 1 else f"load level {loads[k - 2] / 1e3:.4g} kN"))
+            fz = float(np.asarray(out["static_contact"])[2])
+            require_equilibrium("drum_cleat: loaded on the still drum", fz, load)
+            checks, info = static_summary(out["static_infos"])
+            info["levels"] = int(len(loads) + 2)
+            ph = [phase(out["phases"], i) for i in range(2)]
+            return ph[0], ph[1], checks | {"load_contact_vs_load_rel_error": abs(fz - load) / load}, info
         names = ("inflate", "load", "roll", "impact")
         ph = [phase(out["phases"], i) for i in range(4)]
         for i, (n, p) in enumerate(zip(names, ph)):
             check_phase(n, p, model, require_settled=i < 2)
         fz_ld, err_ld, _ = contact_check(ph[1].saved, load)
         require_equilibrium("drum_cleat: loaded on the still drum", fz_ld, load)
+        checks = phase_checks("inflate", ph[0], model) | phase_checks("load", ph[1], model)
+        return ph[2], ph[3], checks | {"load_contact_vs_load_rel_error": err_ld}, {"method": "transient"}
+
+    def reduce(self, tire, condition, outputs):
+        out = outputs[0]
+        model, load = tire.model, condition["load_N"]
+        roll, imp, checks0, info0 = self._loaded(out, model, load)
+        check_phase("roll", roll, model, require_settled=False)
+        check_phase("impact", imp, model, require_settled=False)
         mem = {k: float(v) for k, v in out["mem"].items()}
-        imp, roll = ph[3], ph[2]
         V, R_d = float(self.speed), float(self.drum_radius)
         t = float(imp.t0)
         n = self.n_save
@@ -204,8 +260,7 @@ class DrumCleat(Experiment):
              "raw_resolution_Hz": sp.raw_resolution_Hz, "padded_resolution_Hz": sp.padded_resolution_Hz,
              "m_b_kg": m_b, "deflection_m": mem["defl"], "contact_half_length_on_drum_m": mem["a"],
              "peak_axle_force_N": float(np.max(f_axle)), "static_axle_force_N": float(np.mean(f_axle[pre]))}
-        checks = phase_checks("inflate", ph[0], model) | phase_checks("load", ph[1], model) | {
-            "load_contact_vs_load_rel_error": err_ld,
+        checks = checks0 | {
             "spectrum_peak_at_band_edge": sp.peak_at_band_edge, "fit_rms_relative": sp.fit_rms_relative,
             "fit_vs_peak_rel_diff": sp.rel_diff_f,
             "contact_vs_axle_mode_rel_diff": (sp_c.f_peak_Hz - f1) / f1,
@@ -213,7 +268,7 @@ class DrumCleat(Experiment):
             "roll_spin_end_rad_s": float(roll_spin[-1]),
             "roll_spin_drift_last_quarter_rel": float(np.ptp(roll_spin[-n // 4:]) / abs(roll_spin[-1])),
             "rolling_radius_from_spin_m": float(V / np.mean(spin[pre])), "free_samples": sp.n}
-        info = run_info(out["phases"]) | {
+        info = info0 | run_info(out["phases"]) | {
             "axle_force": "tire_on_rim z: the tire's force on the rim (beads and rim closure pressure)",
             "drum_radius_m": R_d, "surface_speed_m_s": V, "cleat_radius_m": float(self.cleat_radius),
             "cleat_height_m": float(self.cleat_height), "cleat_height_note": "not given by the study: a config choice",
@@ -223,3 +278,6 @@ class DrumCleat(Experiment):
         sig = {"time_s": ts - t_touch, "axle_force_N": f_axle, "axle_force_x_N": s["tire_on_rim"][:, 0],
                "contact_force_z_N": fc, "belt_disp_z_m": bz, "spin_rad_s": spin}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
+
+
+_drum_path_jit = eqx.filter_jit(_drum_path)  # one compiled static program for every drum and cleat

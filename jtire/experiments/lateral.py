@@ -1,17 +1,17 @@
 """E09 lateral tire stiffness k_l and damping C_l: a lateral force at the rim of the loaded tire.
 
-Method "static" (the default when decay_s = 0, the static part only): the static load path of E01
-(`static_path`: inflation, first contact, 13 vertical levels to the load) and then the lateral
-force in two static levels (F/2, F) with rim y and z free, friction carried from level to level:
-k_l = F / y, long-term moduli. One compiled program with E01 and E02.
+Method "static" (the default; "auto" is the same): the static load path of E01 (`static_path`:
+inflation, first contact, 13 vertical levels to the load) and then the lateral force in two static
+levels (F/2, F) with rim y and z free, friction carried from level to level: k_l = F / y, long-term
+moduli (one compiled program with E01 and E02 when decay_s = 0). When decay_s > 0 the lateral force
+is then ramped off in `release_ramp` and the rim's lateral free decay, an explicit transient from
+the held static state (every Maxwell branch relaxed, the tread's shear as the static levels left
+it), gives C_l with M = m_wheel (tire + rim mass from the tire config): two peaks and a damped-sine
+fit about the fitted final level (friction may keep the rim off its pre-load position, reported).
 
-Method "transient" (the default when decay_s > 0: the release decay needs a time history). Phases:
-inflate -> load onto the road (rim z free) -> the lateral force `force` ramped on at the rim
-centre with rim y and z free (friction holds the patch), settled: k_l = F / y_ss. Then, when
-decay_s > 0, the lateral force is ramped off in `release_ramp` with the settle damping off and the
-rim's lateral free decay gives C_l with M = m_wheel (tire + rim mass from the tire config): two
-peaks and a damped-sine fit about the fitted final level (friction may keep the rim off its
-pre-load position, reported).
+Method "transient": every phase explicit. Inflate -> load onto the road (rim z free) -> the lateral
+force ramped on at the rim centre with rim y and z free (friction holds the patch), settled by
+dynamic relaxation: k_l = F / y_ss; then the same release.
 """
 
 from typing import ClassVar
@@ -24,14 +24,14 @@ import numpy as np
 from .. import equilibrium as EQ
 from .. import solve
 from .. import units as U
-from ..errors import ConfigError
 from ..schema import Field
 from .base import Experiment
 from .decay import (decay_about_fit, decay_checks, decay_names, decay_quantities, release_branch, sample_times,
                     wheel_mass)
 from .loads import DOWN, LEFT, RIM_YZ
 from .phases import flat_road, load_branch, loaded_plan
-from .program import check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info
+from .program import (check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info,
+                      run_plan_vmapped)
 from .result import ExperimentResult
 from .static_path import STATIC_LOADS, check_static_path, static_summary, static_vertical_path
 
@@ -65,7 +65,11 @@ class LateralStiffness(Experiment):
     release_ramp: jax.Array
     with_decay: bool = eqx.field(static=True)
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)
-    method: str = eqx.field(static=True, default="transient")
+    method: str = eqx.field(static=True, default="static")
+
+    @property
+    def time_stepped(self) -> bool:
+        return self.method == "transient" or self.with_decay  # the release decay is a transient
 
     @classmethod
     def produces(cls, table):
@@ -74,19 +78,25 @@ class LateralStiffness(Experiment):
     @classmethod
     def from_table(cls, table, proto, tire_spec):
         decay, method = table["decay_s"], table["method"]
-        if method == "static" and decay > 0:
-            raise ConfigError(f"lateral_stiffness.method = \"static\" with decay_s = {decay:g}: a static solve has no "
-                              f"release decay (set decay_s = 0, or method = \"transient\" or \"auto\")")
-        if method == "auto":
-            method = "transient" if decay > 0 else "static"
+        method = "static" if method == "auto" else method
         return cls(proto=proto, force=f64(table["force_kN"]), decay=f64(decay),
                    release_ramp=f64(table["release_ramp_ms"]), with_decay=decay > 0, method=method)
 
     def simulate(self, model, params, case):
         if self.method == "static":
             loads = case.load * jnp.arange(1, STATIC_LOADS + 1) / STATIC_LOADS
-            return {"static": static_vertical_path(model, params, case.pressure, loads,
-                                                   self.force * jnp.array([0.5, 1.0]))}
+            st = static_vertical_path(model, params, case.pressure, loads, self.force * jnp.array([0.5, 1.0]))
+            if not self.with_decay:
+                return {"static": st}
+            # the release from the held static state, on the road the static levels stood on
+            def release(c):
+                return [release_branch(c, surface=flat_road(st["road_height"][-1]),
+                                       load0=c.load * DOWN + self.force * LEFT, load1=c.load * DOWN,
+                                       rim_free=RIM_YZ, ramp=self.release_ramp, duration=self.decay)]
+
+            outs, _, _ = run_plan_vmapped(model, params, release, case, st["y_lateral"], {}, self.proto.ke_tol,
+                                          self.n_save)
+            return {"static": st, "phases": outs}
         extra = lateral_branches(model, case, self.proto, self.force)
         if self.with_decay:
             extra.append(lambda y, t, mem: release_branch(
@@ -121,12 +131,36 @@ class LateralStiffness(Experiment):
         q = {"k_l_N_per_m": force / abs(y_ss), "lateral_deflection_m": abs(y_ss), "lateral_force_N": force}
         sig = {"lateral_force_N": lat, "rim_y_m": np.asarray(st["lateral_q"])[:, 1] - np.asarray(st["q"])[-1, 1]}
         info["levels"] = int(len(np.asarray(st["loads"])) + 2 + len(lat))
+        return q, sig, checks, info
+
+    def _with_decay(self, tire, condition, q, checks, info, rel, y_preload):
+        """The release decay's quantities, checks and signals added to the held state's result.
+        y_preload: the rim's lateral position under the vertical load alone (m)."""
+        check_phase("release", rel, tire.model, require_settled=False)
+        decay, ramp = float(self.decay), float(self.release_ramp)
+        ts = sample_times(rel, decay, self.n_save)
+        y = np.asarray(rel.saved["q"])[:, 1] - y_preload
+        M = wheel_mass(tire.spec)
+        fd = decay_about_fit(ts, y, M, float(ts[0]) + ramp)
+        q |= decay_quantities(fd, "decay_mass_kg", "C_l", "Ns_per_m")
+        checks |= decay_checks(fd, rel) | {
+            # friction may keep the rim off its pre-load position; this is how far (m)
+            "release_final_level_minus_preload_m": float(fd.x_final),
+            "release_contact_lateral_force_end_N": float(np.asarray(rel.saved["contact_force"])[-1, 1])}
+        sig = {"time_s": ts - ts[0], "rim_y_m": y, "rim_z_m": np.asarray(rel.saved["q"])[:, 2],
+               "contact_force_y_N": np.asarray(rel.saved["contact_force"])[:, 1]}
+        info |= {"decay_s": decay, "release_ramp_s": ramp, "decay_samples": int(ts.size)}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
 
     def reduce(self, tire, condition, outputs):
         out = outputs[0]
         if self.method == "static":
-            return self._reduce_static(tire, condition, out["static"])
+            q, sig, checks, info = self._reduce_static(tire, condition, out["static"])
+            if not self.with_decay:
+                return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
+            info |= run_info(out["phases"])
+            return self._with_decay(tire, condition, q, checks, info, phase(out["phases"], 0),
+                                    float(np.asarray(out["static"]["q"])[-1, 1]))
         model, load, force = tire.model, condition["load_N"], float(self.force)
         inf, ld, lat = (phase(out["phases"], i) for i in range(3))
         for name, ph in (("inflate", inf), ("load", ld), ("lateral", lat)):
@@ -140,22 +174,7 @@ class LateralStiffness(Experiment):
         checks |= {"contact_lateral_force_N": fy, "contact_vs_lateral_rel_error": abs(abs(fy) - force) / force,
                    "vertical_deflection_m": -float(ld.q_end[2])}
         q = {"k_l_N_per_m": force / abs(y_ss), "lateral_deflection_m": abs(y_ss), "lateral_force_N": force}
-        info = run_info(out["phases"])
+        info = run_info(out["phases"]) | {"method": "transient"}
         if not self.with_decay:
             return ExperimentResult(self.name, condition, q, checks=checks, info=info)
-        rel = phase(out["phases"], 3)
-        check_phase("release", rel, model, require_settled=False)
-        decay, ramp = float(self.decay), float(self.release_ramp)
-        ts = sample_times(rel, decay, self.n_save)
-        y = np.asarray(rel.saved["q"])[:, 1] - float(ld.q_end[1])
-        M = wheel_mass(tire.spec)
-        fd = decay_about_fit(ts, y, M, float(ts[0]) + ramp)
-        q |= decay_quantities(fd, "decay_mass_kg", "C_l", "Ns_per_m")
-        checks |= decay_checks(fd, rel) | {
-            # friction may keep the rim off its pre-load position; this is how far (m)
-            "release_final_level_minus_preload_m": float(fd.x_final),
-            "release_contact_lateral_force_end_N": float(np.asarray(rel.saved["contact_force"])[-1, 1])}
-        sig = {"time_s": ts - ts[0], "rim_y_m": y, "rim_z_m": np.asarray(rel.saved["q"])[:, 2],
-               "contact_force_y_N": np.asarray(rel.saved["contact_force"])[:, 1]}
-        info |= {"decay_s": decay, "release_ramp_s": ramp, "decay_samples": int(ts.size)}
-        return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
+        return self._with_decay(tire, condition, q, checks, info, phase(out["phases"], 3), float(ld.q_end[1]))

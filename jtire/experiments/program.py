@@ -171,6 +171,18 @@ def run_plan(model, params, branches, y0, mem0: dict, ke_tol, n_save: int):
     return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *outs), y, mem
 
 
+def run_plan_vmapped(model, params, make_branches, case, y0, mem0: dict, ke_tol, n_save: int):
+    """`run_plan` of the branches `make_branches(case)` from state y0, vmapped over a batch of this one
+    case: the phase program the transient experiments run with a batch of one (`batch.simulate_batch`),
+    so a transient started from a static state (computed unbatched: a vmapped Newton loop runs both
+    branches of its conditionals) shares it, and two such cases side by side on two cores do not
+    contend as two unbatched programs do (docs/speed.md). Returns what run_plan does, unbatched."""
+    one = lambda a: jnp.asarray(a)[None]  # noqa: E731
+    out = jax.vmap(lambda c, y: run_plan(model, params, make_branches(c), y, mem0, ke_tol, n_save))(
+        jax.tree_util.tree_map(one, case), jax.tree_util.tree_map(one, y0))
+    return jax.tree_util.tree_map(lambda a: a[0], out)
+
+
 # ---- host side -------------------------------------------------------------------------------------
 def phase(outs: PhaseOut, i: int) -> PhaseOut:
     """Phase i of stacked (host, numpy) outputs."""

@@ -6,8 +6,8 @@ Rim locked in all six DOFs, no road, the belt (crown part: belt, undertread, tre
 (`physics.rigid_belt`), so only the sidewalls deform; rigid from the start, through the inflation too
 (the study's rigid tread/undertread is a rigid body throughout).
 
-    1. inflate with the rim held (settle damping on, checked settled);
-    2. hold: ramp the belt load on and settle: the static stiffness k = load / steady motion;
+    1. inflate with the rim held;
+    2. hold: the belt load on: the static stiffness k = load / steady motion;
     3. release: ramp the belt load off in `release_ramp` (1 ms: a step for the 25-40 Hz belt modes)
        with the settle damping OFF and record the belt's rigid motion; reduce it with
        `decay` (two peaks and a damped-sine fit) about the unloaded level, C = xi 2 M omega_n with M
@@ -20,7 +20,14 @@ Loads, as the resultant `Drive.belt_load` takes (force, moment about the belt's 
     E08: F at the top and F at the bottom, opposite   -> M_x = 2 F r  (k_bgamma = 2 F r / gamma_ss)
     E13: F at the top and F at the bottom, fore-aft   -> F_x = 2 F    (k_bx = 2 F / x_ss)
 r is the belt radius at its centre line (the distance from the axle to the belt where the forces act,
-measured on the inflated state). On a rigid body only the resultant matters. The load does not enter.
+measured on the inflated state; the static method takes it at rest, which a rigid belt keeps through
+the inflation, checked). On a rigid body only the resultant matters. The load does not enter.
+
+Method "static" (the default): steps 1 and 2 are static equilibria (`jtire.equilibrium`, long-term
+moduli: the belt held "until steady" with the rubber fully relaxed), and the release is the explicit
+transient from the held state (every Maxwell branch relaxed, at rest). Method "transient": steps 1
+and 2 by dynamic relaxation too (settle damping on, settled when the kinetic energy is below the
+protocol's tolerance), as before.
 """
 
 from typing import ClassVar
@@ -30,22 +37,34 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import equilibrium as EQ
 from .. import signals, solve
 from .. import units as U
 from ..errors import ConfigError
+from ..physics.rigid_belt import belt_motion
 from ..schema import Field
 from ..state import TireState
 from .base import Experiment
 from .decay import decay_checks, decay_names, decay_quantities, release_branch, sample_times
 from .loads import RIM_LOCKED
-from .phases import FAR, flat_road, make_drive
-from .program import Phase, check_phase, f64, phase, run_info, run_plan
+from .phases import FAR, Case, flat_road, make_drive
+from .program import Phase, check_phase, f64, phase, run_info, run_plan, run_plan_vmapped
 from .result import ExperimentResult
+from .static_path import static_summary
 
 ZERO6 = np.zeros(6)
 
 
 INERTIAS = ("model", "study")
+
+
+def _belt_hold(model, params, pressure, load6):
+    """Inflation and the belt load `load6` as static levels (rigid belt, rim held): a Path of 2 levels."""
+    return EQ.static_path(model, params, pressure, EQ.belt_levels(pressure, load6[None]), rigid_belt=True)
+
+
+# compiled once for E05, E07, E08 and E13 (same level count): a Newton solver is long to compile
+_belt_hold_jit = eqx.filter_jit(_belt_hold)
 
 
 def decay_inertia(spec, own: dict, key: str, inertia: str = "model") -> float:
@@ -79,13 +98,19 @@ class _Sidewall(Experiment):
     release_ramp: jax.Array
     n_save: int = eqx.field(static=True, default=solve.N_SAVE)
     inertia: str = eqx.field(static=True, default="model")  # E05, E08: "study" takes [reference]'s
+    method: str = eqx.field(static=True, default="static")  # inflation and hold: "static" or "transient"
     options: ClassVar[tuple] = ()  # further static fields taken from the table as they are
+
+    @property
+    def time_stepped(self) -> bool:
+        return True  # the release is a transient whichever way the held state was reached
 
     @staticmethod
     def schema_for(force_kN, force_help, inertia=False):
         s = {"force_kN": Field(float, U.KN, 0.01, 200, force_kN, force_help),
              "decay_s": Field(float, 1, 0.02, 2, 0.2, "s of free decay after the release"),
-             "release_ramp_ms": Field(float, U.MS, 0, 20, 1.0, "ms (0: a step)")}
+             "release_ramp_ms": Field(float, U.MS, 0, 20, 1.0, "ms (0: a step)"),
+             "method": Field(str, default="static", choices=("static", "transient"))}
         if inertia:  # the belt inertia of C = 2 I omega_n: the model's own, or the study's ([reference])
             s["inertia"] = Field(str, default="model", choices=INERTIAS)
         return s
@@ -103,7 +128,7 @@ class _Sidewall(Experiment):
             raise ConfigError(f"{cls.name}.inertia = 'study': the tire file's [reference] gives no {cls.own_key} "
                               f"(allowed: {', '.join(INERTIAS)}; model: the model's own)")
         return cls(proto=proto, force=f64(table["force_kN"]), decay=f64(table["decay_s"]),
-                   release_ramp=f64(table["release_ramp_ms"]), inertia=inertia,
+                   release_ramp=f64(table["release_ramp_ms"]), inertia=inertia, method=table["method"],
                    **{k: table[k] for k in cls.options if k in table})
 
     def load6(self, r):
@@ -119,6 +144,8 @@ class _Sidewall(Experiment):
         return float(tire.mesh.masses()[self.own_key])
 
     def simulate(self, model, params, case):
+        if self.method == "static":
+            return self._simulate_static(model, params, case)
         proto, road = self.proto, flat_road(-FAR)
         kw = dict(surface=road, rigid_belt=True)
 
@@ -142,6 +169,26 @@ class _Sidewall(Experiment):
         # the end state too: the tests check on it that the belt stayed rigid through every phase
         return {"phases": outs, "r": mem["r"], "y": y}
 
+    def _simulate_static(self, model, params, case):
+        """Inflation and hold as static levels (rigid belt, rim held), then the release from the held
+        state. The belt radius is taken at rest: a rigid belt keeps it through the inflation (the
+        inflated state's radius is returned beside it and checked)."""
+        y0 = TireState.at_rest(model, len(params.relaxation_times))
+        r = belt_radius(model, y0)
+        load = self.load6(r)
+        path = _belt_hold_jit(model, params, case.pressure, load)
+        inflated, held = (jax.tree_util.tree_map(lambda a, k=k: a[k], path.ys) for k in (0, 1))
+        pose = lambda y: jnp.stack(belt_motion(y.x, model.x_ref, model.node_mass, model.belt_mask))  # noqa: E731
+        def release(c):
+            return [release_branch(c, surface=flat_road(-FAR), load0=load, load1=ZERO6, rim_free=RIM_LOCKED,
+                                   ramp=self.release_ramp, duration=self.decay, belt=True, rigid_belt=True)]
+
+        # the rigid-belt runs never see the load (per pressure: tests/test_sidewall.py reads their jaxpr)
+        blind = Case(f64(0.0), case.pressure, case.dt, case.aux)
+        outs, y, _ = run_plan_vmapped(model, params, release, blind, held, {}, self.proto.ke_tol, self.n_save)
+        return {"phases": outs, "r": r, "r_inflated": belt_radius(model, inflated), "y": y,
+                "static_infos": path.infos, "poses": jnp.stack([pose(inflated), pose(held)])}
+
     def _coord(self, ph):
         """The measured coordinate at the end of a phase (last saved sample; the phase settled)."""
         key, k = self.saved_field
@@ -152,6 +199,10 @@ class _Sidewall(Experiment):
     def traced(self, model, params, condition_cases, outputs):
         out = outputs[0]
         key, k = self.saved_field
+        if self.method == "static":
+            x = out["poses"][:, 0 if key == "belt_disp" else 1, k]
+            x_ss = jnp.abs(x[1] - x[0])
+            return {self.k_name: jnp.max(jnp.abs(self.load6(out["r"]))) / x_ss, self.x_name: x_ss}
         ph = out["phases"]
 
         def end(i):
@@ -162,16 +213,33 @@ class _Sidewall(Experiment):
         x_ss = jnp.abs(end(1) - end(0))
         return {self.k_name: jnp.max(jnp.abs(self.load6(out["r"]))) / x_ss, self.x_name: x_ss}
 
-    def reduce(self, tire, condition, outputs):
-        out = outputs[0]
-        model = tire.model
+    def _held_static(self, out):
+        """(x0, x1, release phase, checks, info) of the static method: the inflated and held coordinates."""
+        EQ.check_static(out["static_infos"], lambda k: f"{self.name}: " + ("inflation" if k == 0 else "hold (belt load)"))
+        key, k = self.saved_field
+        x0, x1 = (float(v) for v in np.asarray(out["poses"])[:, 0 if key == "belt_disp" else 1, k])
+        checks, info = static_summary(out["static_infos"])
+        r, r_inf = float(out["r"]), float(out["r_inflated"])
+        # the load's lever arm is the belt radius at rest; the rigid belt must keep it when inflated
+        checks["belt_radius_inflated_rel_change"] = abs(r_inf - r) / r
+        return x0, x1, phase(out["phases"], 0), checks, info | {"levels": 2}
+
+    def _held_transient(self, out, model):
         inf, held, rel = (phase(out["phases"], i) for i in range(3))
         check_phase("inflate", inf, model)
         check_phase("hold", held, model)
+        checks = {"inflate_settled": bool(inf.settled), "hold_settled": bool(held.settled),
+                  "hold_t_s": float(held.t_end - held.t0)}
+        return self._coord(inf), self._coord(held), rel, checks, {"method": "transient"}
+
+    def reduce(self, tire, condition, outputs):
+        out = outputs[0]
+        model = tire.model
+        x0, x1, rel, checks, info0 = (self._held_static(out) if self.method == "static"
+                                      else self._held_transient(out, model))
         check_phase("release", rel, model, require_settled=False)
         r = float(out["r"])
         load6 = np.asarray(self.load6(r))
-        x0, x1 = self._coord(inf), self._coord(held)
         x_ss = x1 - x0
         load = float(np.abs(load6).max())
         decay, ramp = float(self.decay), float(self.release_ramp)
@@ -186,9 +254,7 @@ class _Sidewall(Experiment):
         q |= decay_quantities(fd, self.mass_name, self.c_name, self.c_unit)
         q["decay_mass_source"] = self.inertia  # "model": Mesh.masses(); "study": the tire file's [reference]
         own = self.own_inertia(tire)
-        checks = {"inflate_settled": bool(inf.settled), "hold_settled": bool(held.settled),
-                  "hold_t_s": float(held.t_end - held.t0),
-                  "model_own_mass_or_inertia": own,
+        checks |= {"model_own_mass_or_inertia": own,
                   # single-DOF check: the rigid belt's own mass (inertia) x omega_n^2 against the static
                   # k; they differ by the sidewalls' share of the motion and viscoelastic stiffening
                   "k_from_frequency_own_mass": own * fd.omega_n_fit**2,
@@ -196,7 +262,7 @@ class _Sidewall(Experiment):
         checks |= decay_checks(fd, rel)
         sig = {"time_s": ts - ts[0], self.x_name.replace("_ss", ""): x,
                "rubber_dissipated_J": np.asarray(rel.saved["dissipated"]) - float(np.asarray(rel.saved["dissipated"])[0])}
-        info = run_info(out["phases"]) | {"study_id": self.study_id, "decay_s": decay, "release_ramp_s": ramp,
+        info = info0 | run_info(out["phases"]) | {"study_id": self.study_id, "decay_s": decay, "release_ramp_s": ramp,
                                           "load_applied_as": "resultant on the rigid belt (force, moment about its mass centre)"}
         return ExperimentResult(self.name, {"pressure_Pa": condition["pressure_Pa"]}, q, signals=sig, checks=checks,
                                 info=info)

@@ -22,8 +22,8 @@ def _static_vertical_path(model, params, pressure, loads, lateral):
     ascending), then N_LATERAL lateral rim forces `lateral` (N, +y) at the last vertical load with
     rim y and z free. Levels: 0 inflated, 1 the touch (rim held 1 mm into the road), 2.. the loads,
     then the lateral forces. Returns arrays per vertical level (q, rim_force, contact, road_height,
-    infos), the state y after the last vertical load, and the lateral levels' q, contact, infos and
-    end state (lateral_*)."""
+    infos), the inflated state y_inflated, the state y after the last vertical load, and the lateral
+    levels' q, contact, infos and end state (lateral_*)."""
     path = EQ.static_path(model, params, pressure, EQ.vertical_levels(pressure, loads),
                           EQ.lateral_levels(pressure, loads[-1], lateral))
     n = loads.shape[0] + 2
@@ -32,6 +32,7 @@ def _static_vertical_path(model, params, pressure, loads, lateral):
     last = lambda ys: jax.tree_util.tree_map(lambda a: a[-1], ys)  # noqa: E731
     return {"loads": loads, "q": vert.q, "rim_force": vert.rim_force, "contact": vert.contact,
             "road_height": vert.road_height, "infos": vert.infos, "y": last(vert.ys),
+            "y_inflated": jax.tree_util.tree_map(lambda a: a[0], vert.ys),
             "lateral": lateral, "lateral_q": lat.q, "lateral_contact": lat.contact, "lateral_infos": lat.infos,
             "y_lateral": last(lat.ys)}
 

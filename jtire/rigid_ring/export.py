@@ -26,7 +26,7 @@ def export(char, out_dir, tir_name: str = "rigid_ring.tir", longvl: float = 6.70
     lines = [report.markdown(char, "in"), report.markdown(char, "out"), "### Trends\n", trends.markdown(vs)]
     if fit is not None:
         lines.append(f"MF fit ({'all pressures' if all_pressures else 'nominal pressure'}): "
-                     f"max |F_y,MF - F_y| over 0-{fit.err_range_deg:g} deg = {100 * fit.max_fy_error:.2f} % of peak"
+                     f"max |F_y,MF - F_y| over {fit.range_text()} = {100 * fit.max_fy_error:.2f} % of peak"
                      + ("" if fit.max_mz_error is None else f", M_z {100 * fit.max_mz_error:.2f} %")
                      + ("" if fit.success else f" (optimizer: {fit.message})"))
         for fz, p, efy, emz in fit.errors:

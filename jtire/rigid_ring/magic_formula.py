@@ -135,6 +135,17 @@ class FitResult:
     success: bool
     message: str
     at_bound: tuple = ()  # fitted coefficients that ended on a bound of BOUNDS: not identified by the curves
+    reach_deg: tuple = ()  # per condition: the largest |alpha| (deg) of its curve within err_range_deg
+
+    def range_text(self) -> str:
+        """The slip-angle range the errors cover: "0-8 deg", or, where a curve ends sooner (a steady
+        sweep that stopped), "0-8 deg (0-4 deg at 68.1 kN, 483 kPa: the curve ends there)"."""
+        short = [(e[0], e[1], r) for e, r in zip(self.errors, self.reach_deg) if r < self.err_range_deg - 1e-9]
+        text = f"0-{self.err_range_deg:g} deg"
+        if short:
+            text += " (" + "; ".join(f"0-{r:.3g} deg at {fz / 1e3:.4g} kN, {p / 1e3:.0f} kPa" for fz, p, r in short)
+            text += ": the curve ends there)"
+        return text
 
     def bound_note(self, key):
         """Why a coefficient sits on its bound, or None."""
@@ -246,9 +257,10 @@ def fit_pure_lateral(data, nominal: Nominal, fit_pkY4=False, fit_shifts=None, fi
         ok = ok and bool(sol_m.success)
         msg += f"; M_z: {sol_m.message}"
 
-    errors = []
+    errors, reach = [], []
     for i, (d, (a, f, m)) in enumerate(zip(data, iso)):
         w = np.abs(a) <= np.radians(err_range_deg) + 1e-12
+        reach.append(float(np.degrees(np.abs(a[w]).max())) if w.any() else 0.0)
         e_fy = float(np.max(np.abs(fy0(coef, nominal, d.fz, a[w], d.p) - f[w])) / peak_fy[i]) if w.any() else None
         e_mz = None
         if m is not None and w.any():
@@ -260,7 +272,8 @@ def fit_pure_lateral(data, nominal: Nominal, fit_pkY4=False, fit_shifts=None, fi
     mz_errs = [e[3] for e in errors if e[3] is not None]
     return FitResult(coefficients=coef, fitted_fy=tuple(names), fitted_mz=tuple(mz_names), nominal=nominal,
                      errors=tuple(errors), err_range_deg=err_range_deg, max_fy_error=max(fy_errs) if fy_errs else float("nan"),
-                     max_mz_error=max(mz_errs) if mz_errs else None, success=ok, message=msg, at_bound=at_bound)
+                     max_mz_error=max(mz_errs) if mz_errs else None, success=ok, message=msg, at_bound=at_bound,
+                     reach_deg=tuple(reach))
 
 
 def curves_from_characterization(char, pressures=None) -> list:

@@ -203,12 +203,16 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None):
         if curves:
             fit = mf.fit_pure_lateral(curves, mf.Nominal(fz0, p0, R0))
     if fit is not None:
+        rng = f"0-{fit.err_range_deg:g} deg"
+        if fit.range_text() != rng:  # a curve ends before err_range_deg (a steady sweep that stopped)
+            notes.append(f"MF fit errors over {fit.range_text()}")
+            rng += " or where the curve ends (notes)"
         for k in mf.FY_KEYS + mf.MZ_KEYS:
             how = "fitted to the E10 curves" if k in fit.fitted_fy + fit.fitted_mz else "fixed in the E10 fit"
             bound = fit.bound_note(k)
             if bound:
                 notes.append(f"{k} {bound}")
-            put(k, fit.coefficients[k], f"{how} (max F_y error {100 * fit.max_fy_error:.2g} % of peak over 0-{fit.err_range_deg:g} deg)"
+            put(k, fit.coefficients[k], f"{how} (max F_y error {100 * fit.max_fy_error:.2g} % of peak over {rng})"
                 + (f"; {bound}" if bound else ""))
         angles = [abs(a) for r in char.rows if r.curves is not None for a in r.curves.slip_angle_deg]
         put("ALPMIN", -math.radians(max(angles)), "widest E10 slip angle")
