@@ -1,5 +1,5 @@
 """Benchmark the free decays started from a static equilibrium (method = "static", the default of
-E04, E05, E07, E08, E09 and E13) against the same experiments run as transients throughout
+E03, E04, E05, E07, E08, E09 and E13) against the same experiments run as transients throughout
 (method = "transient": explicit inflation, loading and settling).
 
 Each experiment runs its shipped config through the same path as `jtire run`, twice per method in
@@ -26,6 +26,7 @@ CONFIGS = REPO / "configs" / "experiments"
 
 # the quantities compared, per experiment (the stiffness of the held state, the decay's damping)
 COMPARE = {
+    "drum_cleat": ("first_mode_Hz", "k_dv_N_per_m", "first_mode_xi", "deflection_m", "peak_axle_force_N"),
     "drop_test": ("k_sv_N_per_m", "C_tot_Ns_per_m", "C_tot_fit_Ns_per_m", "omega_n_fit_rad_per_s"),
     "inplane_rotation": ("k_btheta_Nm_per_rad", "C_btheta_Nms_per_rad", "C_btheta_fit_Nms_per_rad"),
     "sidewall_translation": ("k_by_N_per_m", "C_by_Ns_per_m", "C_by_fit_Ns_per_m"),

@@ -235,8 +235,9 @@ def test_sweep_grid(user_dir, capsys, e01_grid):
 def test_frames_and_vtk(user_dir, capsys, e01_grid):
     """`jtire run ... --frames 5 --out runs/e09` then `jtire export-vtk runs/e09`: frames in
     frames.npz (up to 5 per phase, and each phase's end), one .vtu per frame and a .pvd. The frames
-    are the run's own states: the first is the tire before contact (no contact pressure), and the
-    rim's lateral travel seen in the frames is the lateral deflection the run reports."""
+    are the run's own states of its explicit part, the release from the held static state (the
+    default method): the first is the held tire, loaded on the road, its rim off the pre-load
+    position by the lateral deflection the run reports."""
     import numpy as np
 
     cmd = "jtire run configs/experiments/lateral_stiffness.toml --frames 5 --out runs/e09"
@@ -245,16 +246,17 @@ def test_frames_and_vtk(user_dir, capsys, e01_grid):
     with np.load(run / "frames.npz") as z:
         fr = {k: z[k] for k in z.files}
     n = len(fr["t"])
-    assert n >= 8 and np.all(np.diff(fr["t"]) > 0)  # inflate, load, lateral, release: start .. end of each
+    assert n >= 5 and np.all(np.diff(fr["t"]) > 0)  # the release: its start .. its end
     T, S = fr["nodes_ref"].shape[:2]
     assert fr["nodes"].shape == (n, T, S, 3) and fr["contact_pressure_Pa"].shape == (n, T, S)
-    assert np.all(fr["contact_pressure_Pa"][0] == 0.0)  # the first frame: before any contact
-    assert fr["contact_pressure_Pa"][-1].max() > 1e5  # loaded on the road: of the order of the inflation
-    q = json.loads((run / "result.json").read_text())["quantities"]
-    # the rim's lateral travel from its place before the lateral load: largest at the lateral phase's
-    # end (a frame); the free decay after the release overshoots by less (damped), so not np.ptp
-    y = fr["q"][:, 1]
-    assert np.max(np.abs(y - y[0])) == pytest.approx(q["lateral_deflection_m"], rel=0.05)
+    # loaded on the road from the first frame on: contact pressure of the order of the inflation
+    assert fr["contact_pressure_Pa"][0].max() > 1e5 and fr["contact_pressure_Pa"][-1].max() > 1e5
+    res = json.loads((run / "result.json").read_text())
+    assert res["info"]["method"] == "static"
+    # the first frame is the held state: the rim off its pre-load place (y = 0 under the vertical
+    # load alone, by the tire's mirror symmetry) by the lateral deflection (1 %: round-off and the
+    # frame sampling, which takes the state at the release's start)
+    assert abs(fr["q"][0, 1]) == pytest.approx(res["quantities"]["lateral_deflection_m"], rel=0.01)
     capsys.readouterr()
     assert jtire("jtire export-vtk runs/e09") == 0
     assert f"wrote {n} frames" in capsys.readouterr().out
