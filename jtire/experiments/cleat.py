@@ -48,7 +48,7 @@ from .phases import first_contact_height, make_drive, with_spin
 from .program import (Phase, check_phase, contact_check, f64, phase, phase_checks, require_equilibrium, run_info, run_plan,
                       run_plan_vmapped)
 from .result import ExperimentResult
-from .static_path import STATIC_LOADS, static_summary
+from .static_path import STATIC_LOADS, check_static_path, static_summary
 
 CROSS_ALLOWANCE = 0.06  # s: room in the impact phase for the cleat to cross the patch (2a + cleat < 0.8 m at 50 km/h)
 
@@ -212,8 +212,7 @@ class DrumCleat(Experiment):
         """(the roll and impact phases, checks, info) after checking how the loaded state was reached."""
         if self.method == "static":
             loads = np.asarray(out["static_loads"])
-            EQ.check_static(out["static_infos"], lambda k: "drum_cleat: " + (
-                "inflation" if k == 0 else "first contact" if k == 1 else f"load level {loads[k - 2] / 1e3:.4g} kN"))
+            check_static_path("drum_cleat", {"loads": loads, "infos": out["static_infos"]})
             fz = float(np.asarray(out["static_contact"])[2])
             require_equilibrium("drum_cleat: loaded on the still drum", fz, load)
             checks, info = static_summary(out["static_infos"])
