@@ -325,6 +325,21 @@ def secant(x, y, at, along="y") -> SecantResult:
     return SecantResult(secant=float(ya / xa), x_at=float(xa), y_at=float(ya))
 
 
+def tangent(x, y, at_y, half_width) -> float:
+    """dy/dx where the curve y(x) passes y = at_y: the slope at x(at_y) of a quadratic fitted to
+    the points with |y - at_y| <= half_width (needs >= 3; a quadratic, not a chord, so a curve
+    that stiffens is not read as its secant over the window)."""
+    x, y = (np.asarray(v, dtype=float) for v in (x, y))
+    m = np.isfinite(x) & np.isfinite(y) & (np.abs(y - at_y) <= half_width)
+    if int(m.sum()) < 3 or np.ptp(x[m]) == 0:
+        raise ConfigError(f"at = {at_y:g} +- {half_width:g}: holds {int(m.sum())} distinct points, need at least 3")
+    xs, ys = x[m], y[m]
+    x0 = float(np.interp(at_y, np.sort(ys), xs[np.argsort(ys)]))
+    scale = float(np.ptp(xs))
+    c = np.polyfit((xs - x0) / scale, ys, min(2, int(m.sum()) - 1))
+    return float(c[-2] / scale)
+
+
 # ---- steady state -------------------------------------------------------------------------
 @dataclasses.dataclass(frozen=True)
 class SteadyResult(ResultMixin):

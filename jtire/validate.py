@@ -96,16 +96,18 @@ def step_metrics(result, speeds=(5.0, 15.0)) -> tuple:
     return m, sig
 
 
-def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ) -> dict:
+def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ, lateral="ring") -> dict:
     """The ring's scenarios; belt_band_Hz: where its drop looks for the belt mode (the shell's band,
-    or the full BELT_BAND_HZ when the shell has none)."""
+    or the full BELT_BAND_HZ when the shell has none); lateral: the ring's out-of-plane model in the
+    lateral release and the slip step ("ring": belt DOFs, or "reduced")."""
     from .rigid_ring import scenarios as sc
     from .rigid_ring.params import derive
 
     d = derive(row, tire_info)
-    out = {"drop": sc.drop_test(d, f_band=tuple(belt_band_Hz)), "drum": sc.drum_cleat(d), "lateral": sc.lateral_release(d)}
+    out = {"drop": sc.drop_test(d, f_band=tuple(belt_band_Hz)), "drum": sc.drum_cleat(d),
+           "lateral": sc.lateral_release(d, lateral=lateral)}
     for v in (5.0, 15.0):
-        out[f"step_{v:g}"] = sc.slip_step(d, speed=v)
+        out[f"step_{v:g}"] = sc.slip_step(d, speed=v, lateral=lateral)
     return out
 
 

@@ -1,7 +1,8 @@
 """E02 total static vertical stiffness k_sv: the rim load 0 -> max_load on a flat road.
 
 k_sv is the secant load / deflection at the stated load (calibration variant: 50 kN at 120 psi must
-give 39.0625 mm) and, beside it, the slope of a linear fit of load against deflection over
+give 39.0625 mm); beside it the tangent dF/d(deflection) at that load (k_sv_tangent: what small
+motions about the loaded state see) and the slope of a linear fit of load against deflection over
 `fit_range`. Deflection is the rim's travel from first contact.
 
 Two methods (`method` in the table):
@@ -41,7 +42,7 @@ class VerticalStiffness(Experiment):
               "ramp_s": Field(float, 1, 0.02, 5, 0.9, "s"),  # a shorter ramp reads stiff: the viscoelastic lag (docs/design-notes.md)
               "fit_range_kN": Field(list, U.KN, 0, 500, [10.0, 60.0], "kN")}
     traced_names = ("k_sv_N_per_m", "deflection_m")
-    quantity_names = ("k_sv_N_per_m", "k_sv_fit_N_per_m", "deflection_m", "stated_load_N", "max_load_N", "fit_r2",
+    quantity_names = ("k_sv_N_per_m", "k_sv_tangent_N_per_m", "k_sv_fit_N_per_m", "deflection_m", "stated_load_N", "max_load_N", "fit_r2",
                       "settled_deflection_at_max_load_m")
 
     max_load: jax.Array
@@ -91,6 +92,15 @@ class VerticalStiffness(Experiment):
         grid = self.max_load * jnp.arange(1, self.n_levels + 1) / self.n_levels
         return jnp.sort(jnp.concatenate([grid, jnp.atleast_1d(stated)]))
 
+    def _tangent(self, defl, load, stated):
+        """dF/d(deflection) at the stated load (N/m), over +- two static level spacings: the
+        stiffness small motions about the loaded state see (the rigid ring's dynamic springs). None
+        when fewer than three points lie there (the ring then falls back to the secant, and says so)."""
+        try:
+            return signals.tangent(defl, load, stated, 2.0 * float(self.max_load) / int(self.n_levels))
+        except ConfigError:
+            return None
+
     def _simulate_static(self, model, params, case):
         stated = jnp.where(self.stated_load > 0, self.stated_load, case.load)
         loads = self._levels(stated)
@@ -117,7 +127,8 @@ class VerticalStiffness(Experiment):
         require_equilibrium("vertical_stiffness: at the maximum load", float(fz[-1]), float(loads[-1]))
         checks, info = static_summary(out["infos"])
         checks["contact_vs_load_max_rel_error"] = float(np.max(np.abs(fz - loads) / loads))
-        q = {"k_sv_N_per_m": stated / defl[k], "k_sv_fit_N_per_m": fit.slope, "deflection_m": float(defl[k]),
+        q = {"k_sv_N_per_m": stated / defl[k], "k_sv_tangent_N_per_m": self._tangent(defl, loads, stated),
+             "k_sv_fit_N_per_m": fit.slope, "deflection_m": float(defl[k]),
              "stated_load_N": stated, "max_load_N": float(loads[-1]), "fit_r2": fit.r2,
              "settled_deflection_at_max_load_m": float(defl[-1])}
         sig = {"load_N": loads, "contact_force_N": fz, "deflection_m": defl}
@@ -172,7 +183,8 @@ class VerticalStiffness(Experiment):
         checks |= {"quasi_static_deflection_rel_error": abs(d_ramp_at_max - d_static) / d_static,
                    "contact_vs_load_max_rel_error_in_ramp": float(np.max(np.abs(f_r - l_r)[upper] / l_r[upper])),
                    "contact_vs_load_rel_error_settled": abs(fz_end - l_static) / l_static}
-        q = {"k_sv_N_per_m": sec.secant, "k_sv_fit_N_per_m": fit.slope, "deflection_m": sec.x_at,
+        q = {"k_sv_N_per_m": sec.secant, "k_sv_tangent_N_per_m": self._tangent(d_r, l_r, stated),
+             "k_sv_fit_N_per_m": fit.slope, "deflection_m": sec.x_at,
              "stated_load_N": stated, "max_load_N": l_static, "fit_r2": fit.r2,
              "settled_deflection_at_max_load_m": d_static}
         sig = {"time_s": t[in_ramp], "load_N": l_r, "contact_force_N": f_r, "deflection_m": d_r}

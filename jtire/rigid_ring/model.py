@@ -11,7 +11,7 @@ gamma_b] (rim a, belt b; m, rad), their velocities (10,), then the contact's tre
 
 In-plane (Zegelaar & Pacejka; §4): belt and rim joined by the sidewall springs/dampers
 (k_bx, C_bx; k_bz, C_bz; k_btheta, C_btheta); the belt stands on the residual spring
-F_z = max(0, k_vr rho + C_vr rho_dot) where rho = R0 - (z_b - z_road) > 0, else 0 (no adhesion:
+F_z = max(0, k_vr rho + k_vr2 rho^2 + C_vr rho_dot) where rho = R0 - (z_b - z_road) > 0, else 0 (no adhesion:
 the max), with the damper faded in over the first RHO_RAMP = 0.5 mm of deflection (continuous force:
 see `forces`).
 Longitudinal slip (§5): u = a kappa', a du/dt + |V| u = -a V_sx, V_sx = V + x_b' - r_e theta_b'
@@ -25,7 +25,8 @@ F_y = -(k_cy e + C_cy de/dt), sigma_c = k_f / k_cy. Steady: F_y = -k_f sin(alpha
 Out-of-plane, "reduced" (§5 fallback, MF 6.1's own transient): no belt lateral DOFs; the rim
 (mass m_tot) on k_l || C_l to a single contact point with sigma = k_f / k_l. Do not mix with the
 ring's k_by, k_bgamma (the carcass compliance would count twice).
-M_z = -(k_m / k_f) F_y (pneumatic trail), acting on the rim (no belt yaw DOF).
+M_z = M_z,E10(alpha') at alpha' = -F_y_SAE / k_f: the condition's steady E10 curve (odd part,
+piecewise linear; k_m alpha', the pneumatic trail k_m/k_f, without one), on the rim (no belt yaw DOF).
 Omitted (§4): rotating-sidewall Omega terms, Q_BVX/Q_BVT stiffening, rolling resistance, cleat
 enveloping (a point contact follows the road profile: waveforms are not comparable with the shell
 model's, frequencies and decay are).
@@ -136,7 +137,7 @@ class RigidRing(eqx.Module):
         # first RHO_RAMP of deflection so the force stays continuous: a jump C_vr x impact speed at
         # the touch would make the adjoint miss the touch time's sensitivity (docs/design-notes.md)
         ramp = jnp.clip(rho / RHO_RAMP, 0.0, 1.0)
-        fz = contact * jnp.maximum(0.0, p.k_vr * rho + ramp * p.C_vr * (zr_dot - vzb))
+        fz = contact * jnp.maximum(0.0, (p.k_vr + p.k_vr2 * rho) * rho + ramp * p.C_vr * (zr_dot - vzb))
         fsx = -p.k_bx * (xb - xa) - p.C_bx * (vxb - vxa)
         fsz = -p.k_bz * (zb - za) - p.C_bz * (vzb - vza)
         msth = -p.k_btheta * (thb - tha) - p.C_btheta * (vthb - vtha)
@@ -163,7 +164,9 @@ class RigidRing(eqx.Module):
             fy = -contact * (p.k_l * e + p.C_l * e_dot)
             fsy = msg = jnp.zeros_like(fy)
             rim_y = fy
-        mz = -(p.k_m / p.k_f) * fy
+        # M_z from E10's steady curve at the slip the force stands for (alpha'_SAE = F_y_ISO / k_f; linear
+        # k_m alpha' without a curve); an output only: the ring has no yaw DOF
+        mz = -jnp.interp(fy / p.k_f, p.mz_alpha, p.mz_value)
         return {"F_x": fx, "F_y": fy, "F_z": fz, "M_z": mz, "F_sx": fsx, "F_sz": fsz, "M_stheta": msth,
                 "F_sy": fsy, "M_sgamma": msg, "u_dot": u_dot, "e_dot": e_dot, "r_l": rl, "rho": rho,
                 "z_road": zr, "alpha_iso": alpha, "contact": contact,

@@ -9,24 +9,11 @@ import math
 
 import numpy as np
 
+from .linear import modes as _modes
 from .model import VXLOW
 from .params import RigidRingParams
 
 __all__ = ["vertical_modes", "belt_vertical_mode", "fore_aft_modes", "lateral_modes", "string_step_s63"]
-
-
-def _modes(M, K, C):
-    """(f_n Hz, zeta, eigenvectors (n, k) of the positions) of M q'' + C q' + K q = 0, oscillatory
-    modes only, sorted by frequency."""
-    n = M.shape[0]
-    Mi = np.linalg.inv(M)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Mi @ K, -Mi @ C]])
-    lam, vec = np.linalg.eig(A)
-    keep = lam.imag > 1e-9
-    lam, vec = lam[keep], vec[:n, keep]
-    order = np.argsort(np.abs(lam))
-    lam, vec = lam[order], vec[:, order]
-    return np.abs(lam) / (2 * math.pi), -lam.real / np.abs(lam), vec
 
 
 def vertical_modes(d):

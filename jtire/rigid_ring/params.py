@@ -6,13 +6,18 @@ the tables and the .tir export). `RigidRingParams.from_derived(d)` gives the mod
 float64 leaves; `Derived.missing(group)` names what a scenario
 lacks; a missing input is a finite placeholder, see `_leaf`).
 
-Vertical split (§3). 1/k_sv = 1/k_bz + 1/k_vr (sidewall and residual springs in series, static).
+Vertical split (§3, revised). The dynamic springs use the tangent k_vt of E02's load-deflection
+  curve at the load (the secant k_sv when the row has none, named in stiffness_source):
+  1/k_vt = 1/k_bz + 1/k_vr (sidewall and residual springs in series, small motions about the load).
   Variant A (used when valid): k_dv = k_bz + k_vr (rim locked, belt on the drum: both act on the
-    belt), k_bz, k_vr = (k_dv +- sqrt(k_dv^2 - 4 k_dv k_sv)) / 2, larger root to the sidewall;
-    needs k_dv >= 4 k_sv.
-  Variant B (reported beside; used when A is invalid): k_bz = k_dv, k_vr = (1/k_sv - 1/k_dv)^-1.
-  Damping: one time constant tau = C_tot / k_sv for both, C_bz = tau k_bz, C_vr = tau k_vr (two
-  Kelvin-Voigt elements with equal tau in series are exactly one with k_sv and tau k_sv).
+    belt), k_bz, k_vr = (k_dv +- sqrt(k_dv^2 - 4 k_dv k_vt)) / 2, larger root to the sidewall;
+    needs k_dv >= 4 k_vt.
+  Variant B (reported beside; used when A is invalid): k_bz = k_dv, k_vr = (1/k_vt - 1/k_dv)^-1.
+  The residual spring is F = k_vr1 rho + k_vr2 rho^2, its tangent at the load k_vr and its secant
+  (1/k_sv - 1/k_bz)^-1, so the ring rests at F_z/k_sv and rings at the tangent.
+  Damping from the two tests that excite it (`_damping_split`): E03's belt-mode zeta gives C_bz + C_vr,
+  E04's in-contact bounce zeta how it divides; the first spec's one time constant tau = C_tot / k_sv
+  for both (C_bz = tau k_bz, C_vr = tau k_vr) is the named fallback (damping_source).
 Longitudinal sidewall spring: k_bx, C_bx measured by E13 (rigid belt pushed fore-aft, jtire's addition);
   without E13 the first spec's isotropy assumption k_bx = k_bz, C_bx = tau k_bx, named in k_bx_source.
 Lateral tread spring (§5): 1/k_cy = 1/k_l - 1/k_by - r_b^2/k_bgamma (rim held in camber; r_b the
@@ -27,8 +32,10 @@ import math
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 
 from ..errors import ConfigError
+from .linear import modes as linear_modes
 from .table import ConditionRow, TireInfo
 
 SIGMA_C_RANGE = (0.25, 4.0)  # plausible sigma_c / a
@@ -72,7 +79,7 @@ class Derived:
     # derived
     rho: float | None  # static deflection F_z / k_sv
     r_l: float | None  # loaded radius R0 - rho (rim centre height)
-    r_b: float | None  # belt-centre height R0 - F_z / k_vr: the ring's lever arm to the road
+    r_b: float | None  # belt-centre height R0 - rho_r: the ring's lever arm to the road
     r_e: float | None  # effective rolling radius R0 - rho / 3
     variant_A_valid: bool
     variant_used: str | None  # "A" or "B" or None
@@ -81,7 +88,7 @@ class Derived:
     k_bz_B: float | None
     k_vr_B: float | None
     k_bz: float | None
-    k_vr: float | None
+    k_vr: float | None  # residual spring's tangent at the load (with k_bz: k_dv, and the dynamics)
     tau: float | None  # C_tot / k_sv (s)
     C_bz: float | None
     C_vr: float | None
@@ -99,6 +106,22 @@ class Derived:
     C_x: float | None  # LONGITUDINAL_STIFFNESS: 1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta
     trail: float | None  # k_m / k_f
     k_bx_source: str | None = None  # "E13" (measured) or the isotropy assumption's name
+    k_vt: float | None = None  # E02's tangent vertical stiffness at the load (None: not measured)
+    k_vr_secant: float | None = None  # residual spring's secant at the load: 1/k_sv - 1/k_bz
+    k_vr1: float | None = None  # contact law F = k_vr1 rho + k_vr2 rho^2 (N/m, N/m^2): its secant at the
+    k_vr2: float | None = None  # load is k_vr_secant (static rest at F_z/k_sv), its tangent k_vr
+    rho_r: float | None = None  # residual spring's deflection at the load (m)
+    stiffness_source: str | None = None  # which stiffness the dynamic springs use, and why
+    damping_source: str | None = None  # how C_bz, C_vr were identified (or the fallback, and why)
+    mz_curve: tuple | None = None  # (alpha SAE rad (n,), M_z SAE N m (n,)): E10's steady curve, odd, ascending
+
+    def residual_deflection(self, force: float) -> float:
+        """The residual spring's deflection (m) under a contact force (N): the root of
+        k_vr1 rho + k_vr2 rho^2 = force."""
+        k1, k2 = self.k_vr1, self.k_vr2 or 0.0
+        if k2 == 0.0:
+            return force / k1
+        return 2.0 * force / (k1 + math.sqrt(k1 * k1 + 4.0 * k2 * force))  # the stable form of the root
 
     @property
     def k_bx_measured(self) -> bool:
@@ -120,7 +143,7 @@ class Derived:
                 "DAMP_LONG": damp(self.C_bz, self.k_bz, t.m_b_kg), "DAMP_LAT": damp(self.C_by, self.k_by, t.m_b_kg),
                 "DAMP_YAW": damp(self.C_bgamma, self.k_bgamma, t.I_bx_kgm2),
                 "DAMP_WINDUP": damp(self.C_btheta, self.k_btheta, t.I_by_kgm2),
-                "DAMP_RESIDUAL": self.tau}
+                "DAMP_RESIDUAL": self.C_vr / self.k_vr if _ok(self.C_vr, self.k_vr) and self.k_vr > 0 else None}
 
     def missing(self, group: str) -> list:
         """Inputs a model part lacks: group "vertical", "inplane", "lateral_ring", "lateral_reduced"."""
@@ -137,6 +160,109 @@ class Derived:
         m = self.missing(group)
         if m:
             raise ConfigError(f"{what} at {self.load_N:.0f} N / {self.pressure_Pa:.0f} Pa: missing {m}")
+
+
+def _vertical_split(k_dyn, k_dv):
+    """§3's split of the dynamic stiffness k_dyn (tangent or secant) with the drum's k_dv:
+    (valid_a, k_bz_A, k_vr_A, k_bz_B, k_vr_B, variant used, k_bz, k_vr)."""
+    valid_a = _ok(k_dyn, k_dv) and k_dv >= 4 * k_dyn
+    k_bz_a = k_vr_a = k_bz_b = k_vr_b = None
+    if valid_a:
+        disc = math.sqrt(k_dv * k_dv - 4 * k_dv * k_dyn)
+        k_bz_a, k_vr_a = 0.5 * (k_dv + disc), 0.5 * (k_dv - disc)
+    if _ok(k_dyn, k_dv) and k_dv > k_dyn:
+        k_bz_b, k_vr_b = k_dv, 1.0 / (1.0 / k_dyn - 1.0 / k_dv)
+    if valid_a:
+        return valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, "A", k_bz_a, k_vr_a
+    if k_bz_b is not None:
+        return valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, "B", k_bz_b, k_vr_b
+    return valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, None, None, None
+
+
+def _residual_spring(fz, k_sv, k_bz, k_vr):
+    """The residual (belt-road) spring's law F = k_vr1 rho + k_vr2 rho^2 such that, with the sidewall's
+    k_bz in series, its secant at the load gives the static rest F_z/k_sv and its tangent is k_vr.
+    Returns (fields, None) or (None, why) when no such law stiffens monotonically from rho = 0
+    (k_vr2 >= 0, k_vr1 > 0)."""
+    if not k_bz > k_sv:
+        return None, f"k_bz = {k_bz:.4g} N/m <= k_sv: no residual secant"
+    ks = 1.0 / (1.0 / k_sv - 1.0 / k_bz)
+    rho = fz / ks
+    k1, k2 = 2.0 * ks - k_vr, (k_vr - ks) / rho
+    if k2 < 0 or k1 <= 0:
+        return None, "its residual spring softens" if k2 < 0 else "its residual spring stiffens past a quadratic"
+    return {"k_vr_secant": ks, "k_vr1": k1, "k_vr2": k2, "rho_r": rho}, None
+
+
+def _damping_split(tire, k_bz, k_vr, zeta_v, zeta_bounce, tau, n_grid=201):
+    """(C_bz, C_vr, source) from two tests (rigid-ring.md §3, revised): the rim-locked belt mode on the
+    drum (E03's modal zeta_v) fixes C_bz + C_vr = 2 zeta_v sqrt((k_bz + k_vr) m_b); the drop's bounce
+    in contact (E04's zeta after the last lift-off: rim mass on the sidewall, belt on the road) fixes
+    how it divides. The share is found where the linear 2-DOF bounce mode's zeta meets the measured
+    one (a root bracketed on a grid, then bisected; the root nearest the equal-tau share when there are
+    two). No root, or a missing input: the one time constant tau = C_tot/k_sv for both (named)."""
+    def fallback(why):
+        c = (None, None) if not _ok(tau, k_bz, k_vr) else (tau * k_bz, tau * k_vr)
+        return (*c, f"one time constant tau = C_tot/k_sv for both (fallback: {why})")
+
+    if not _ok(k_bz, k_vr):
+        return fallback("no vertical split")
+    if not _ok(zeta_v, zeta_bounce) or zeta_v <= 0 or zeta_bounce <= 0:
+        miss = [n for n, v in (("E03 first_mode_xi", zeta_v), ("E04 xi_in_contact_fit", zeta_bounce))
+                if not _ok(v) or v <= 0]
+        return fallback(f"no {' or '.join(miss)}")
+    m_a, m_b = tire.m_tot_kg - tire.m_b_kg, tire.m_b_kg
+    total = 2.0 * zeta_v * math.sqrt((k_bz + k_vr) * m_b)
+    M = np.diag([m_a, m_b])
+    K = np.array([[k_bz, -k_bz], [-k_bz, k_bz + k_vr]])
+
+    def gap(x):  # bounce zeta with C_bz = x total, C_vr = (1 - x) total, minus the measured one
+        cb, cr = x * total, (1.0 - x) * total
+        _, z, _ = linear_modes(M, K, np.array([[cb, -cb], [-cb, cb + cr]]))
+        return (z[0] if len(z) == 2 else np.nan) - zeta_bounce
+
+    xs = np.linspace(0.0, 1.0, n_grid)
+    gs = np.array([gap(x) for x in xs])
+    brackets = [i for i in range(n_grid - 1) if np.isfinite(gs[i]) and np.isfinite(gs[i + 1]) and gs[i] * gs[i + 1] <= 0]
+    if not brackets:
+        ok = gs[np.isfinite(gs)]
+        rng = "" if ok.size == 0 else f" (it spans {ok.min() + zeta_bounce:.3g}-{ok.max() + zeta_bounce:.3g})"
+        return fallback(f"no C_bz, C_vr >= 0 with C_bz + C_vr from the belt mode's zeta {zeta_v:.3g} gives the "
+                        f"bounce's zeta {zeta_bounce:.3g}{rng}")
+    x_tau = k_bz / (k_bz + k_vr)
+    i = min(brackets, key=lambda j: abs(xs[j] - x_tau))
+    lo, hi = xs[i], xs[i + 1]
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if gap(lo) * gap(mid) <= 0:
+            hi = mid
+        else:
+            lo = mid
+    x = 0.5 * (lo + hi)
+    return x * total, (1.0 - x) * total, (f"belt mode zeta {zeta_v:.3g} (E03) and in-contact bounce zeta "
+                                          f"{zeta_bounce:.3g} (E04)")
+
+
+def _mz_curve(curves):
+    """E10's steady M_z(alpha) of the condition as an odd, ascending table (SAE, rad and N m), or None
+    without a curve. Where both signs of an angle were run, their odd part (M(a) - M(-a)) / 2."""
+    if curves is None or curves.M_z_SAE_Nm is None:
+        return None
+    a = np.radians(np.asarray(curves.slip_angle_deg, float))
+    m = np.asarray(curves.M_z_SAE_Nm, float)
+    ok = np.isfinite(a) & np.isfinite(m)
+    a, m = a[ok], m[ok]
+    pos = sorted({round(float(x), 12) for x in np.abs(a) if x > 0})
+    if not pos:
+        return None
+    vals = []
+    for x in pos:
+        plus, minus = m[np.isclose(a, x)], m[np.isclose(a, -x)]
+        vals.append(float(plus.mean() - minus.mean()) / 2 if plus.size and minus.size else
+                    float(plus.mean()) if plus.size else -float(minus.mean()))
+    xs = np.concatenate([-np.asarray(pos)[::-1], [0.0], pos])
+    ms = np.concatenate([-np.asarray(vals)[::-1], [0.0], vals])
+    return tuple(xs.tolist()), tuple(ms.tolist())
 
 
 def derive(row: ConditionRow, tire: TireInfo) -> Derived:
@@ -160,27 +286,35 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
     r_l = None if rho is None else r0 - rho
     r_e = None if rho is None else r0 - rho / 3
 
-    valid_a = _ok(k_sv, k_dv) and k_dv >= 4 * k_sv
-    k_bz_a = k_vr_a = k_bz_b = k_vr_b = None
-    if valid_a:
-        disc = math.sqrt(k_dv * k_dv - 4 * k_dv * k_sv)
-        k_bz_a, k_vr_a = 0.5 * (k_dv + disc), 0.5 * (k_dv - disc)
-    if _ok(k_sv, k_dv) and k_dv > k_sv:
-        k_bz_b, k_vr_b = k_dv, 1.0 / (1.0 / k_sv - 1.0 / k_dv)
-    if valid_a:
-        used, k_bz, k_vr = "A", k_bz_a, k_vr_a
-    elif k_bz_b is not None:
-        used, k_bz, k_vr = "B", k_bz_b, k_vr_b
+    # the springs small motions see: E02's tangent at the load (the load-deflection curve stiffens, and
+    # the secant makes the ring's bounce and impact soft), with a quadratic residual spring that keeps
+    # the static rest at F_z/k_sv; the secant and a linear spring when that is not possible (named)
+    k_t = g("k_sv_tangent_N_per_m")
+    vert = res = None
+    if not (_ok(k_t, fz, k_sv) and k_t > 0):
+        why = "no tangent in the row"
     else:
-        used = k_bz = k_vr = None
+        vert = _vertical_split(k_t, k_dv)
+        why = "neither vertical split is valid with the tangent"
+        if vert[6] is not None:
+            res, why = _residual_spring(fz, k_sv, vert[6], vert[7])
+    if res is not None:
+        res["stiffness_source"] = "tangent at the load (E02), static rest at the secant k_sv"
+    else:
+        vert = _vertical_split(k_sv, k_dv)
+        k_lin = vert[7]
+        res = {"k_vr_secant": k_lin, "k_vr1": k_lin, "k_vr2": 0.0 if _ok(k_lin) else None,
+               "rho_r": fz / k_lin if _ok(k_lin, fz) else None, "stiffness_source": f"secant k_sv ({why})"}
+    valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, used, k_bz, k_vr = vert
     tau = c_tot / k_sv if _ok(c_tot, k_sv) else None
+    split = _damping_split(tire, k_bz, k_vr, g("first_mode_xi"), g("xi_in_contact_fit"), tau)
 
     def times(t, k):
         return t * k if _ok(t, k) else None
 
     sigma = k_f / k_l if _ok(k_f, k_l) else None
     k_cy = sigma_c = c_cy = src = k_l_ring = k_l_err = None
-    r_b = r_l if k_vr is None else r0 - fz / k_vr
+    r_b = r_l if res["rho_r"] is None else r0 - res["rho_r"]
     if _ok(k_l, k_by, k_bgamma, r_b, k_f, a):
         comp = 1.0 / k_l - 1.0 / k_by - r_b**2 / k_bgamma
         sc = k_f * comp if comp > 0 else None
@@ -211,10 +345,20 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
         k_by=k_by, C_by=g("C_by_Ns_per_m"), k_bgamma=k_bgamma, C_bgamma=g("C_bgamma_Nms_per_rad"), k_l=k_l,
         C_l=c_l, k_f=k_f, k_m=k_m, sigma_measured=g("sigma_m"), rho=rho, r_l=r_l, r_b=r_b, r_e=r_e,
         variant_A_valid=bool(valid_a), variant_used=used, k_bz_A=k_bz_a, k_vr_A=k_vr_a, k_bz_B=k_bz_b,
-        k_vr_B=k_vr_b, k_bz=k_bz, k_vr=k_vr, tau=tau, C_bz=times(tau, k_bz), C_vr=times(tau, k_vr),
+        k_vr_B=k_vr_b, k_bz=k_bz, k_vr=k_vr, tau=tau, C_bz=split[0], C_vr=split[1],
         C_bz_B=times(tau, k_bz_b), C_vr_B=times(tau, k_vr_b), k_bx=k_bx, C_bx=c_bx, sigma=sigma,
         k_cy=k_cy, sigma_c=sigma_c, C_cy=c_cy, k_cy_source=src, k_l_ring=k_l_ring, k_l_ring_rel_error=k_l_err,
-        C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src)
+        C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src,
+        k_vt=k_t, **res, damping_source=split[2], mz_curve=_mz_curve(row.curves))
+
+
+def _mz_table(d: Derived) -> dict:
+    if d.mz_curve is not None:
+        a, m = d.mz_curve
+    else:
+        k_m = 1.0 if d.k_m is None else d.k_m
+        a, m = (-1.0, 1.0), (-k_m, k_m)
+    return {"mz_alpha": jnp.asarray(a, dtype=jnp.float64), "mz_value": jnp.asarray(m, dtype=jnp.float64)}
 
 
 def _leaf(x):
@@ -247,7 +391,7 @@ class RigidRingParams(eqx.Module):
     r_e: jnp.ndarray
     k_bz: jnp.ndarray
     C_bz: jnp.ndarray
-    k_vr: jnp.ndarray
+    k_vr: jnp.ndarray  # the residual spring F = k_vr rho + k_vr2 rho^2 (Derived.k_vr1, k_vr2)
     C_vr: jnp.ndarray
     k_bx: jnp.ndarray
     C_bx: jnp.ndarray
@@ -265,6 +409,9 @@ class RigidRingParams(eqx.Module):
     k_f: jnp.ndarray
     k_m: jnp.ndarray
     damp_vlow: jnp.ndarray
+    k_vr2: jnp.ndarray
+    mz_alpha: jnp.ndarray  # M_z(alpha') as a table (SAE, rad and N m; alpha' = -F_y_SAE / k_f): E10's curve,
+    mz_value: jnp.ndarray  # or the line k_m alpha' through two points when the row has none
 
     @classmethod
     def from_derived(cls, d: Derived, damp_vlow: float = 0.001) -> "RigidRingParams":
@@ -274,11 +421,12 @@ class RigidRingParams(eqx.Module):
         return cls(m_b=_leaf(t.m_b_kg), m_a=_leaf(t.m_tot_kg - t.m_b_kg), m_tot=_leaf(t.m_tot_kg),
                    I_by=_leaf(t.I_by_kgm2), I_bx=_leaf(t.I_bx_kgm2), I_ay=_leaf(t.I_ay_kgm2), I_ax=_leaf(t.I_ax_kgm2),
                    R0=_leaf(t.unloaded_radius_m), a=_leaf(d.a), r_l=_leaf(d.r_l), r_e=_leaf(d.r_e),
-                   k_bz=_leaf(d.k_bz), C_bz=_leaf(d.C_bz), k_vr=_leaf(d.k_vr), C_vr=_leaf(d.C_vr),
+                   k_bz=_leaf(d.k_bz), C_bz=_leaf(d.C_bz), k_vr=_leaf(d.k_vr1), C_vr=_leaf(d.C_vr),
                    k_bx=_leaf(d.k_bx), C_bx=_leaf(d.C_bx), k_btheta=_leaf(d.k_btheta), C_btheta=_leaf(d.C_btheta),
                    k_k=_leaf(d.k_k), k_by=_leaf(d.k_by), C_by=_leaf(d.C_by), k_bgamma=_leaf(d.k_bgamma),
                    C_bgamma=_leaf(d.C_bgamma), k_cy=_leaf(d.k_cy), C_cy=_leaf(d.C_cy), k_l=_leaf(d.k_l),
-                   C_l=_leaf(d.C_l), k_f=_leaf(d.k_f), k_m=_leaf(d.k_m), damp_vlow=_leaf(damp_vlow))
+                   C_l=_leaf(d.C_l), k_f=_leaf(d.k_f), k_m=_leaf(d.k_m), damp_vlow=_leaf(damp_vlow),
+                   k_vr2=_leaf(d.k_vr2 or 0.0), **_mz_table(d))
 
     @classmethod
     def from_row(cls, row: ConditionRow, tire: TireInfo, damp_vlow: float = 0.001) -> "RigidRingParams":

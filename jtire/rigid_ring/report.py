@@ -20,6 +20,7 @@ DASH = "—"
 DERIVED = (
     ("k_bz_N_per_m", "k_bz", "N/m", "kN/m", 1e-3, "in", "k_bz"),
     ("k_vr_N_per_m", "k_vr", "N/m", "kN/m", 1e-3, "in", "k_vr"),
+    ("k_vr2_N_per_m2", "k_vr2", "N/m^2", "MN/m^2", 1e-6, "in", "k_vr2"),
     ("C_bz_Ns_per_m", "C_bz", "N s/m", "N s/m", 1.0, "in", "C_bz"),
     ("C_vr_Ns_per_m", "C_vr", "N s/m", "N s/m", 1.0, "in", "C_vr"),
     ("k_bz_B_N_per_m", "k_bz (B)", "N/m", "kN/m", 1e-3, "in", "k_bz_B"),
@@ -59,6 +60,8 @@ def table_rows(char: Characterization, plane: str) -> list:
         if plane == "in":
             row["vertical_split"] = d.variant_used
             row["k_bx_source"] = d.k_bx_source
+            row["stiffness_source"] = d.stiffness_source
+            row["damping_source"] = d.damping_source
             row["variant_A_valid"] = d.variant_A_valid
             if d.k_dv is not None and d.k_sv is not None:
                 row["k_dv_over_k_sv"] = d.k_dv / d.k_sv
@@ -140,6 +143,10 @@ def markdown(char: Characterization, plane: str) -> str:
                       d.variant_used + ("" if d.variant_A_valid else " (A invalid: k_dv < 4 k_sv)")))
         items.append(("k_bx, C_bx source", lambda r, d: DASH if d.k_bx_source is None else
                       ("E13" if d.k_bx_measured else "k_bz (isotropy: no E13)")))
+        items.append(("dynamic springs", lambda r, d: DASH if d.stiffness_source is None else
+                      ("tangent" if d.stiffness_source.startswith("tangent") else "secant")))
+        items.append(("C_bz, C_vr from", lambda r, d: DASH if d.damping_source is None else
+                      ("E03 + E04" if d.damping_source.startswith("belt mode") else "tau (fallback)")))
     else:
         items.append(("k_cy source", lambda r, d: DASH if d.k_cy_source is None else
                       ("series" if d.k_cy_source.startswith("series") else "fallback sigma_c = a")))
@@ -148,8 +155,10 @@ def markdown(char: Characterization, plane: str) -> str:
             lines.append(f"| {label if i == 0 else ''} | {load / U.G0:.1f} | "
                          + " | ".join(cell(load, p, fn) for p in pressures) + " |")
     title = "In-plane rigid-ring parameters" if plane == "in" else "Out-of-plane rigid-ring parameters"
-    note = ("Vertical split: variant A (k_dv = k_bz + k_vr, needs k_dv >= 4 k_sv) when valid, else B "
-            "(k_bz = k_dv); damping split by tau = C_tot / k_sv." if plane == "in" else
+    note = ("Vertical split of the tangent k_vt (the secant k_sv without one): variant A (k_dv = k_bz + k_vr, needs "
+            "k_dv >= 4 k_vt) when valid, else B (k_bz = k_dv); the residual spring k_vr rho + k_vr2 rho^2 rests at "
+            "F_z/k_sv. C_bz + C_vr from E03's belt-mode zeta, divided so the linear bounce has E04's in-contact "
+            "zeta; else (and in the B columns) tau = C_tot / k_sv for both." if plane == "in" else
             "k_cy from 1/k_l - 1/k_by - r_b^2/k_bgamma, or the fallback sigma_c = a when ill-conditioned.")
     return f"### {title}\n\n" + "\n".join(lines) + f"\n\n{note} Damping: two-peak / fit (relative difference).\n"
 

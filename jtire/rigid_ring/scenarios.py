@@ -38,10 +38,11 @@ def _model(d: Derived, lateral: str, group: str, what: str) -> RigidRing:
 
 def vertical_equilibrium(d: Derived, load_N: float, gravity: float = 0.0, z_road: float = 0.0) -> dict:
     """Static z_a, z_b (m) under a rim force load_N (+ gravity on the masses): contact force
-    F_c = load + m_tot g, belt z_b = z_road + R0 - F_c / k_vr, z_a = z_b - (F_c - m_b g) / k_bz."""
+    F_c = load + m_tot g, belt z_b = z_road + R0 - rho_r(F_c) (the residual spring's law),
+    z_a = z_b - (F_c - m_b g) / k_bz."""
     t = d.tire
     fc = load_N + t.m_tot_kg * gravity
-    zb = z_road + t.unloaded_radius_m - fc / d.k_vr
+    zb = z_road + t.unloaded_radius_m - d.residual_deflection(fc)
     return {"z_b": zb, "z_a": zb - (fc - t.m_b_kg * gravity) / d.k_bz, "F_c": fc}
 
 

@@ -66,6 +66,8 @@ QUANTITIES = (
     _q("contact_length_m", "2a", "m", "E01", "contact patch length (full)", "in", display=("mm", 1e3)),
     _q("contact_width_m", "w", "m", "E01", "contact patch width", "in", display=("mm", 1e3)),
     _q("k_sv_N_per_m", "k_sv", "N/m", "E02", "total static vertical stiffness", "in", display=("kN/m", 1e-3)),
+    _q("k_sv_tangent_N_per_m", "k_vt", "N/m", "E02", "tangent vertical stiffness at the load (the ring's dynamic springs)",
+       "in", display=("kN/m", 1e-3)),
     _q("first_mode_Hz", "f", "Hz", "E03", "first in-plane mode, drum-cleat (FFT peak)", "in"),
     _q("k_dv_N_per_m", "k_dv", "N/m", "E03", "total dynamic vertical stiffness (2 pi f)^2 m_b", "in",
        display=("kN/m", 1e-3)),
@@ -91,8 +93,9 @@ QUANTITIES = (
     _q("sigma_m", "sigma", "m", "E11", "lateral relaxation length k_f / k_l", "out", display=("mm", 1e3)),
 )
 BY_KEY = {q.key: q for q in QUANTITIES}
-# accepted but not tabulated: extra E01/E03 outputs that tests and reports may use
-EXTRA_KEYS = ("deflection_m", "first_mode_fit_fn_Hz", "first_mode_xi", "k_dv_fit_N_per_m")
+# accepted but not tabulated: extra E01/E03/E04 outputs that tests and reports may use
+EXTRA_KEYS = ("deflection_m", "first_mode_fit_fn_Hz", "first_mode_xi", "k_dv_fit_N_per_m", "xi_in_contact_fit",
+              "omega_n_in_contact_fit_rad_per_s")
 CURVE_KEYS = ("slip_angle_deg", "lateral_force_N", "M_z_SAE_Nm", "F_z_N", "F_y_SAE_N", "F_x_N")
 CURVE_REQUIRED = ("slip_angle_deg", "lateral_force_N")
 

@@ -132,7 +132,14 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None):
     put("BELT_IXX", t.I_bx_kgm2, "I_bx, tire config")
     put("BELT_IYY", t.I_by_kgm2, "I_by, tire config")
     put("FNOMIN", fz0, "nominal (rated) load")
-    put("VERTICAL_STIFFNESS", d0.k_sv, f"k_sv (E02) at {at}")
+    if d0.k_vt is not None and d0.k_sv is not None and (d0.stiffness_source or "").startswith("tangent"):
+        # MF 6.1's F_z = FNOMIN (Q_FZ1 rho/R0 + Q_FZ2 (rho/R0)^2), Q_FZ1 = sqrt((C_z R0/FNOMIN)^2 - 4 Q_FZ2):
+        # C_z is then the tangent at FNOMIN, and this Q_FZ2 puts the rest at FNOMIN/k_sv (E02's secant)
+        put("VERTICAL_STIFFNESS", d0.k_vt, f"tangent of the load-deflection curve (E02) at {at}")
+        put("Q_FZ2", (d0.k_vt - d0.k_sv) * d0.k_sv * R0**2 / fz0**2,
+            f"(k_vt - k_sv) k_sv R0^2/FNOMIN^2: rest at FNOMIN/k_sv (E02) at {at}")
+    else:
+        put("VERTICAL_STIFFNESS", d0.k_sv, f"k_sv (E02) at {at}")
     put("VERTICAL_DAMPING", d0.C_tot, f"C_tot (E04) at {at}")
     put("BOTTOM_STIFF", None if d0.k_sv is None else 10 * d0.k_sv, "[A] 10 k_sv")
     put("LONGITUDINAL_STIFFNESS", d0.C_x, f"1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta at {at}")
@@ -143,8 +150,10 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None):
         src = {"FREQ_LONG": "sqrt(k_bz/m_b)/2pi", "FREQ_LAT": "sqrt(k_by/m_b)/2pi", "FREQ_YAW": "sqrt(k_bgamma/I_bx)/2pi",
                "FREQ_WINDUP": "sqrt(k_btheta/I_by)/2pi", "DAMP_LONG": "C_bz/(2 sqrt(k_bz m_b))",
                "DAMP_LAT": "C_by/(2 sqrt(k_by m_b))", "DAMP_YAW": "C_bgamma/(2 sqrt(k_bgamma I_bx))",
-               "DAMP_WINDUP": "C_btheta/(2 sqrt(k_btheta I_by))", "DAMP_RESIDUAL": "C_vr/k_vr = C_tot/k_sv"}[k]
+               "DAMP_WINDUP": "C_btheta/(2 sqrt(k_btheta I_by))", "DAMP_RESIDUAL": "C_vr/k_vr"}[k]
         extra = f", vertical split {d0.variant_used}" if k in ("FREQ_LONG", "DAMP_LONG") else ""
+        if k in ("DAMP_LONG", "DAMP_RESIDUAL") and d0.damping_source:
+            extra += f", dampers: {d0.damping_source}"
         put(k, v, f"{src} at {at}{extra}")
         if k.startswith("DAMP_") and k != "DAMP_RESIDUAL" and v is not None and not 0.01 <= v <= 0.1:
             notes.append(f"{k} = {v:.3g}: public .tir files carry ~0.04")
