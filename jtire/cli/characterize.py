@@ -117,6 +117,13 @@ def _validate(plan, out, say) -> tuple:
             text += ["Causes of the disagreements beyond tolerance:\n", "\n".join(notes) + "\n"]
         written.append(validation.validation_figure(s_sig, r_sig, out / f"validation_{kg:g}kg_{psi:g}psi.png",
                                                     title=f"Rigid ring vs shell model, {kg:g} kg, {psi:g} psi"))
+    counts = {}
+    for _, rows, _, _, _ in res:
+        for r in rows:
+            counts[r.verdict] = counts.get(r.verdict, 0) + 1
+    summary = ", ".join(f"{n} {v}" for v, n in counts.items())
+    text.insert(1, f"Metrics over the {len(res)} conditions: {summary}.\n")
     written.append(atomic_write_text(out / "validation.md", "\n".join(text)))
     say("\n".join(text))
+    say(f"validation: {summary} (validation.md)")
     return [p for p in written if p is not None], failed
