@@ -121,7 +121,7 @@ def test_characterize_reports_a_failed_step_as_an_error(plan_and_folder, monkeyp
     written, failed = _validate(plan, folder, lambda s, err=False: lines.append(s))
     assert len(failed) == 2 and all("blew up at 0.12 s" in f for f in failed)  # rated and soft: 4625 kg
     md = (folder / "validation.md").read_text()
-    assert md.count("SHELL RUN FAILED") == 12 and md.count("rerun the command to retry it") == 2
+    assert md.count("| SHELL RUN FAILED |") == 12 and md.count("rerun the command to retry it") == 2
     # one summary line of the verdicts over every condition, in the file and last on the screen
     summary = lines[-1]
     assert summary.startswith("validation: ") and "12 SHELL RUN FAILED" in summary
