@@ -15,7 +15,7 @@ Vertical split (§3, revised). The dynamic springs use the tangent k_vt of E02's
   Variant B (reported beside; used when A is invalid): k_bz = k_dv, k_vr = (1/k_vt - 1/k_dv)^-1.
   The residual spring is F = k_vr1 rho + k_vr2 rho^2, its tangent at the load k_vr and its secant
   (1/k_sv - 1/k_bz)^-1, so the ring rests at F_z/k_sv and rings at the tangent.
-  Damping from the two tests that excite it (`_damping_split`): E03's belt-mode zeta gives C_bz + C_vr,
+  Damping from the two tests that excite it (`identify.damping_split`): E03's belt-mode zeta gives C_bz + C_vr,
   E04's in-contact bounce zeta how it divides; the first spec's one time constant tau = C_tot / k_sv
   for both (C_bz = tau k_bz, C_vr = tau k_vr) is the named fallback (damping_source).
 Longitudinal sidewall spring: k_bx, C_bx measured by E13 (rigid belt pushed fore-aft, jtire's addition);
@@ -32,10 +32,10 @@ import math
 
 import equinox as eqx
 import jax.numpy as jnp
-import numpy as np
 
 from ..errors import ConfigError
-from .linear import modes as linear_modes
+from .identify import damping_split, mz_curve, residual_spring, vertical_split
+from .identify import finite as _ok
 from .table import ConditionRow, TireInfo
 
 SIGMA_C_RANGE = (0.25, 4.0)  # plausible sigma_c / a
@@ -45,8 +45,6 @@ def _f(x):
     return None if x is None else float(x)
 
 
-def _ok(*xs):
-    return all(x is not None and math.isfinite(x) for x in xs)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -162,109 +160,6 @@ class Derived:
             raise ConfigError(f"{what} at {self.load_N:.0f} N / {self.pressure_Pa:.0f} Pa: missing {m}")
 
 
-def _vertical_split(k_dyn, k_dv):
-    """§3's split of the dynamic stiffness k_dyn (tangent or secant) with the drum's k_dv:
-    (valid_a, k_bz_A, k_vr_A, k_bz_B, k_vr_B, variant used, k_bz, k_vr)."""
-    valid_a = _ok(k_dyn, k_dv) and k_dv >= 4 * k_dyn
-    k_bz_a = k_vr_a = k_bz_b = k_vr_b = None
-    if valid_a:
-        disc = math.sqrt(k_dv * k_dv - 4 * k_dv * k_dyn)
-        k_bz_a, k_vr_a = 0.5 * (k_dv + disc), 0.5 * (k_dv - disc)
-    if _ok(k_dyn, k_dv) and k_dv > k_dyn:
-        k_bz_b, k_vr_b = k_dv, 1.0 / (1.0 / k_dyn - 1.0 / k_dv)
-    if valid_a:
-        return valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, "A", k_bz_a, k_vr_a
-    if k_bz_b is not None:
-        return valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, "B", k_bz_b, k_vr_b
-    return valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, None, None, None
-
-
-def _residual_spring(fz, k_sv, k_bz, k_vr):
-    """The residual (belt-road) spring's law F = k_vr1 rho + k_vr2 rho^2 such that, with the sidewall's
-    k_bz in series, its secant at the load gives the static rest F_z/k_sv and its tangent is k_vr.
-    Returns (fields, None) or (None, why) when no such law stiffens monotonically from rho = 0
-    (k_vr2 >= 0, k_vr1 > 0)."""
-    if not k_bz > k_sv:
-        return None, f"k_bz = {k_bz:.4g} N/m <= k_sv: no residual secant"
-    ks = 1.0 / (1.0 / k_sv - 1.0 / k_bz)
-    rho = fz / ks
-    k1, k2 = 2.0 * ks - k_vr, (k_vr - ks) / rho
-    if k2 < 0 or k1 <= 0:
-        return None, "its residual spring softens" if k2 < 0 else "its residual spring stiffens past a quadratic"
-    return {"k_vr_secant": ks, "k_vr1": k1, "k_vr2": k2, "rho_r": rho}, None
-
-
-def _damping_split(tire, k_bz, k_vr, zeta_v, zeta_bounce, tau, n_grid=201):
-    """(C_bz, C_vr, source) from two tests (rigid-ring.md §3, revised): the rim-locked belt mode on the
-    drum (E03's modal zeta_v) fixes C_bz + C_vr = 2 zeta_v sqrt((k_bz + k_vr) m_b); the drop's bounce
-    in contact (E04's zeta after the last lift-off: rim mass on the sidewall, belt on the road) fixes
-    how it divides. The share is found where the linear 2-DOF bounce mode's zeta meets the measured
-    one (a root bracketed on a grid, then bisected; the root nearest the equal-tau share when there are
-    two). No root, or a missing input: the one time constant tau = C_tot/k_sv for both (named)."""
-    def fallback(why):
-        c = (None, None) if not _ok(tau, k_bz, k_vr) else (tau * k_bz, tau * k_vr)
-        return (*c, f"one time constant tau = C_tot/k_sv for both (fallback: {why})")
-
-    if not _ok(k_bz, k_vr):
-        return fallback("no vertical split")
-    if not _ok(zeta_v, zeta_bounce) or zeta_v <= 0 or zeta_bounce <= 0:
-        miss = [n for n, v in (("E03 first_mode_xi", zeta_v), ("E04 xi_in_contact_fit", zeta_bounce))
-                if not _ok(v) or v <= 0]
-        return fallback(f"no {' or '.join(miss)}")
-    m_a, m_b = tire.m_tot_kg - tire.m_b_kg, tire.m_b_kg
-    total = 2.0 * zeta_v * math.sqrt((k_bz + k_vr) * m_b)
-    M = np.diag([m_a, m_b])
-    K = np.array([[k_bz, -k_bz], [-k_bz, k_bz + k_vr]])
-
-    def gap(x):  # bounce zeta with C_bz = x total, C_vr = (1 - x) total, minus the measured one
-        cb, cr = x * total, (1.0 - x) * total
-        _, z, _ = linear_modes(M, K, np.array([[cb, -cb], [-cb, cb + cr]]))
-        return (z[0] if len(z) == 2 else np.nan) - zeta_bounce
-
-    xs = np.linspace(0.0, 1.0, n_grid)
-    gs = np.array([gap(x) for x in xs])
-    brackets = [i for i in range(n_grid - 1) if np.isfinite(gs[i]) and np.isfinite(gs[i + 1]) and gs[i] * gs[i + 1] <= 0]
-    if not brackets:
-        ok = gs[np.isfinite(gs)]
-        rng = "" if ok.size == 0 else f" (it spans {ok.min() + zeta_bounce:.3g}-{ok.max() + zeta_bounce:.3g})"
-        return fallback(f"no C_bz, C_vr >= 0 with C_bz + C_vr from the belt mode's zeta {zeta_v:.3g} gives the "
-                        f"bounce's zeta {zeta_bounce:.3g}{rng}")
-    x_tau = k_bz / (k_bz + k_vr)
-    i = min(brackets, key=lambda j: abs(xs[j] - x_tau))
-    lo, hi = xs[i], xs[i + 1]
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        if gap(lo) * gap(mid) <= 0:
-            hi = mid
-        else:
-            lo = mid
-    x = 0.5 * (lo + hi)
-    return x * total, (1.0 - x) * total, (f"belt mode zeta {zeta_v:.3g} (E03) and in-contact bounce zeta "
-                                          f"{zeta_bounce:.3g} (E04)")
-
-
-def _mz_curve(curves):
-    """E10's steady M_z(alpha) of the condition as an odd, ascending table (SAE, rad and N m), or None
-    without a curve. Where both signs of an angle were run, their odd part (M(a) - M(-a)) / 2."""
-    if curves is None or curves.M_z_SAE_Nm is None:
-        return None
-    a = np.radians(np.asarray(curves.slip_angle_deg, float))
-    m = np.asarray(curves.M_z_SAE_Nm, float)
-    ok = np.isfinite(a) & np.isfinite(m)
-    a, m = a[ok], m[ok]
-    pos = sorted({round(float(x), 12) for x in np.abs(a) if x > 0})
-    if not pos:
-        return None
-    vals = []
-    for x in pos:
-        plus, minus = m[np.isclose(a, x)], m[np.isclose(a, -x)]
-        vals.append(float(plus.mean() - minus.mean()) / 2 if plus.size and minus.size else
-                    float(plus.mean()) if plus.size else -float(minus.mean()))
-    xs = np.concatenate([-np.asarray(pos)[::-1], [0.0], pos])
-    ms = np.concatenate([-np.asarray(vals)[::-1], [0.0], vals])
-    return tuple(xs.tolist()), tuple(ms.tolist())
-
-
 def derive(row: ConditionRow, tire: TireInfo) -> Derived:
     g = row.get
     fz = row.load_N
@@ -294,20 +189,20 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
     if not (_ok(k_t, fz, k_sv) and k_t > 0):
         why = "no tangent in the row"
     else:
-        vert = _vertical_split(k_t, k_dv)
+        vert = vertical_split(k_t, k_dv)
         why = "neither vertical split is valid with the tangent"
         if vert[6] is not None:
-            res, why = _residual_spring(fz, k_sv, vert[6], vert[7])
+            res, why = residual_spring(fz, k_sv, vert[6], vert[7])
     if res is not None:
         res["stiffness_source"] = "tangent at the load (E02), static rest at the secant k_sv"
     else:
-        vert = _vertical_split(k_sv, k_dv)
+        vert = vertical_split(k_sv, k_dv)
         k_lin = vert[7]
         res = {"k_vr_secant": k_lin, "k_vr1": k_lin, "k_vr2": 0.0 if _ok(k_lin) else None,
                "rho_r": fz / k_lin if _ok(k_lin, fz) else None, "stiffness_source": f"secant k_sv ({why})"}
     valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, used, k_bz, k_vr = vert
     tau = c_tot / k_sv if _ok(c_tot, k_sv) else None
-    split = _damping_split(tire, k_bz, k_vr, g("first_mode_xi"), g("xi_in_contact_fit"), tau)
+    split = damping_split(tire, k_bz, k_vr, g("first_mode_xi"), g("xi_in_contact_fit"), tau)
 
     def times(t, k):
         return t * k if _ok(t, k) else None
@@ -349,7 +244,7 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
         C_bz_B=times(tau, k_bz_b), C_vr_B=times(tau, k_vr_b), k_bx=k_bx, C_bx=c_bx, sigma=sigma,
         k_cy=k_cy, sigma_c=sigma_c, C_cy=c_cy, k_cy_source=src, k_l_ring=k_l_ring, k_l_ring_rel_error=k_l_err,
         C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src,
-        k_vt=k_t, **res, damping_source=split[2], mz_curve=_mz_curve(row.curves))
+        k_vt=k_t, **res, damping_source=split[2], mz_curve=mz_curve(row.curves))
 
 
 def _mz_table(d: Derived) -> dict:
