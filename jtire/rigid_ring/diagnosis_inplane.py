@@ -29,10 +29,6 @@ def _drop_static(cx, c):
     return FULL, txt
 
 
-def _uses_tangent(d):
-    return (d.stiffness_source or "").startswith("tangent")
-
-
 def _in_contact_f(cx):
     """The shell's drop: f_n (Hz) of its small motion after the last lift-off, or None."""
     res, _ = cx.case("drop_test")
@@ -59,7 +55,7 @@ def _drop_bounce_f_tangent(cx, c):
 
 def _drop_bounce_f(cx, c):
     d = cx.d
-    if _uses_tangent(d):
+    if d.uses_tangent:
         return _drop_bounce_f_tangent(cx, c)
     kt = cx.tangent_stiffness()
     if kt is None:
@@ -124,7 +120,7 @@ def _drop_peak(cx, c):
     txt = (f"the load-deflection curve stiffens: the impact energy F_z (h + deflection) of the {h * 1e3:g} mm drop, "
            f"stored on {src}{extra}, gives a peak of {_n(p_curve, 'N')} ({_p(p_curve / c.shell - 1)} against the "
            f"shell's {_n(c.shell, 'N')})")
-    if _uses_tangent(cx.d):
+    if cx.d.uses_tangent:
         txt += (f"; the ring's contact law is a quadratic with E02's secant and tangent at the load, not the whole "
                 f"curve (ring {_n(c.ring, 'N')})")
         state = _verdict(p_curve, c.shell, c.ring, c.tolerance)
@@ -171,7 +167,7 @@ def _drum_vertical_zeta(cx, c):
     d = cx.d
     f_b, z_b = belt_vertical_mode(d)
     t = d.tire
-    if (d.damping_source or "").startswith("belt mode"):
+    if d.dampers_identified:
         # C_bz + C_vr were set from E03's own zeta: the ring's linear belt mode has it by construction
         z_e03 = cx.row.get("first_mode_xi")
         txt = (f"C_bz + C_vr come from E03's modal zeta {z_e03:.3g}: the ring's linear belt mode (rim locked) has "

@@ -122,6 +122,16 @@ class Derived:
         return 2.0 * force / (k1 + math.sqrt(k1 * k1 + 4.0 * k2 * force))  # the stable form of the root
 
     @property
+    def uses_tangent(self) -> bool:
+        """The dynamic springs are E02's tangent (not the secant fallback)."""
+        return (self.stiffness_source or "").startswith("tangent")
+
+    @property
+    def dampers_identified(self) -> bool:
+        """C_bz, C_vr from E03's belt mode and E04's bounce (not the one-time-constant fallback)."""
+        return (self.damping_source or "").startswith("belt mode")
+
+    @property
     def k_bx_measured(self) -> bool:
         """k_bx (and C_bx, or tau k_bx) from E13 rather than the isotropy assumption."""
         return (self.k_bx_source or "").startswith("E13")

@@ -144,9 +144,9 @@ def markdown(char: Characterization, plane: str) -> str:
         items.append(("k_bx, C_bx source", lambda r, d: DASH if d.k_bx_source is None else
                       ("E13" if d.k_bx_measured else "k_bz (isotropy: no E13)")))
         items.append(("dynamic springs", lambda r, d: DASH if d.stiffness_source is None else
-                      ("tangent" if d.stiffness_source.startswith("tangent") else "secant")))
+                      ("tangent" if d.uses_tangent else "secant")))
         items.append(("C_bz, C_vr from", lambda r, d: DASH if d.damping_source is None else
-                      ("E03 + E04" if d.damping_source.startswith("belt mode") else "tau (fallback)")))
+                      ("E03 + E04" if d.dampers_identified else "tau (fallback)")))
     else:
         items.append(("k_cy source", lambda r, d: DASH if d.k_cy_source is None else
                       ("series" if d.k_cy_source.startswith("series") else "fallback sigma_c = a")))

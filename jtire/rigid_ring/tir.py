@@ -132,7 +132,7 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None):
     put("BELT_IXX", t.I_bx_kgm2, "I_bx, tire config")
     put("BELT_IYY", t.I_by_kgm2, "I_by, tire config")
     put("FNOMIN", fz0, "nominal (rated) load")
-    if d0.k_vt is not None and d0.k_sv is not None and (d0.stiffness_source or "").startswith("tangent"):
+    if d0.uses_tangent:
         # MF 6.1's F_z = FNOMIN (Q_FZ1 rho/R0 + Q_FZ2 (rho/R0)^2), Q_FZ1 = sqrt((C_z R0/FNOMIN)^2 - 4 Q_FZ2):
         # C_z is then the tangent at FNOMIN, and this Q_FZ2 puts the rest at FNOMIN/k_sv (E02's secant)
         put("VERTICAL_STIFFNESS", d0.k_vt, f"tangent of the load-deflection curve (E02) at {at}")
