@@ -59,11 +59,14 @@ def test_drop_result(e04, spec):
     assert c["max_deflection_m"] > q["static_deflection_m"] > 0
     assert q["k_sv_N_per_m"] == pytest.approx(LOAD / q["static_deflection_m"])
     assert len({len(v) for v in res.signals.values()}) == 1
+    # the record is saved at sample_rate_Hz (default 2500 Hz): the belt mode's band needs >= 600 Hz
+    assert np.median(np.diff(res.signals["time_s"])) == pytest.approx(1 / 2500, rel=1e-9)
 
 
 @pytest.mark.parametrize("override, field", [("drop_test.drop_height_mm=500", "drop_height_mm"),
                                              ("drop_test.duration_s=0.01", "duration_s"),
-                                             ("drop_test.gravity=1", "gravity")])
+                                             ("drop_test.gravity=1", "gravity"),
+                                             ("drop_test.sample_rate_Hz=100", "sample_rate_Hz")])
 def test_bad_drop_settings_are_refused_before_any_simulation(override, field):
     # (replaces the old k_sv_from check: E04 now always takes k_sv from its own rest at the end)
     with pytest.raises(ConfigError, match=field):

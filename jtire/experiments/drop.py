@@ -51,6 +51,8 @@ class DropTest(Experiment):
     description = "E04 total vertical damping C_tot (drop test)"
     schema = {"drop_height_mm": Field(float, U.MM, 0, 200, 20.0, "mm between the lowest tread point and the road"),
               "duration_s": Field(float, 1, 0.05, 3, 0.4, "s of drop and free decay"),
+              "sample_rate_Hz": Field(float, 1, 500, 20000, 2500,
+                                      "Hz of the saved record (the belt mode, 40-300 Hz, needs >= 600)"),
               "gravity": Field(bool, default=False),
               "method": Field(str, default="static", choices=("static", "transient"))}
     quantity_names = (("C_tot_Ns_per_m", "C_tot_2p_Ns_per_m", "C_tot_fit_Ns_per_m", "k_sv_N_per_m", "k_sv_source",
@@ -75,8 +77,9 @@ class DropTest(Experiment):
         if table["gravity"] and table["method"] == "static":
             raise ConfigError("drop_test.gravity = true: the static levels carry no gravity; set "
                               "drop_test.method = \"transient\" (allowed with gravity: transient)")
+        n_save = int(round(table["duration_s"] * table["sample_rate_Hz"])) + 1
         return cls(proto=proto, drop_height=f64(table["drop_height_mm"]), duration=f64(table["duration_s"]),
-                   gravity=table["gravity"], method=table["method"])
+                   gravity=table["gravity"], method=table["method"], n_save=n_save)
 
     def _g(self):
         return np.array([0.0, 0.0, -U.G0]) if self.gravity else np.zeros(3)
