@@ -68,17 +68,18 @@ def parse_tir(path):
     return out
 
 
-def coefficients(path, tir):
-    """The numbers the equations need, checked: {KEY: float}, and the M_z0 keys the file lacks."""
+def numbers(path, tir, keys, scaling, what):
+    """{KEY: float} of `keys` (each required) and `scaling` (1 when absent), after checking [UNITS] is
+    SI and FITTYP is 61 or 62; what: the equations, for the messages."""
     flat = {k: v for s, kv in tir.items() if s != "UNITS" for k, v in kv.items()}
-    for key, ok in SI_UNITS.items():  # the equations below take SI units
+    for key, ok in SI_UNITS.items():  # the equations take SI units
         v = tir.get("UNITS", {}).get(key, ("str", ok[0]))[1]
         if str(v).lower() not in ok:
             raise TirError(f"{path}: [UNITS] {key} = {v!r}: only {ok[0]} is read")
 
     def number(key):
         if key not in flat:
-            raise TirError(f"{path}: missing key {key} (the F_y0 equations need it)")
+            raise TirError(f"{path}: missing key {key} (the {what} equations need it)")
         kind, v = flat[key]
         if kind != "num":
             raise TirError(f"{path}: {key} = {v!r} is not a number")
@@ -86,14 +87,20 @@ def coefficients(path, tir):
 
     if number("FITTYP") not in (61.0, 62.0):  # 6 / 21 (MF 5.2) files follow other equations
         raise TirError(f"{path}: FITTYP = {flat['FITTYP'][1]:g}: these are the MF 6.1/6.2 equations (61 or 62)")
-    c = {key: number(key) for key in ("FITTYP",) + FY_KEYS}
-    for key in SCALING:
-        c[key] = number(key) if key in flat else 1.0
+    c = {key: number(key) for key in ("FITTYP",) + tuple(keys)}
+    c |= {key: number(key) if key in flat else 1.0 for key in scaling}
+    if c.get("FNOMIN", 1.0) <= 0:
+        raise TirError(f"{path}: FNOMIN = {c['FNOMIN']!r}: must be > 0")
+    return c
+
+
+def coefficients(path, tir):
+    """The numbers the equations need, checked: {KEY: float}, and the M_z0 keys the file lacks."""
+    c = numbers(path, tir, FY_KEYS, SCALING, "F_y0")
+    flat = {k for s, kv in tir.items() if s != "UNITS" for k in kv}
     lacking_mz = [k for k in MZ_KEYS if k not in flat]
     if not lacking_mz:
-        c.update({k: number(k) for k in MZ_KEYS})
-    if c["FNOMIN"] <= 0:
-        raise TirError(f"{path}: FNOMIN = {c['FNOMIN']!r}: must be > 0")
+        c |= numbers(path, tir, MZ_KEYS, (), "M_z0")
     return c, lacking_mz
 
 
@@ -142,6 +149,19 @@ def numerical_slope(c, fz, h=1e-6):
     return float((lateral(c, fz, h)["fy"] - lateral(c, fz, -h)["fy"]) / (2 * h))
 
 
+def loads_asked(ap, text, fnomin):
+    """The loads (N) of --loads-kN, or 0.5, 1 and 1.5 x FNOMIN; a bad list is an argparse error."""
+    if text is None:
+        return [f * fnomin for f in (0.5, 1.0, 1.5)]
+    try:
+        loads = [1e3 * float(s) for s in text.split(",")]
+    except ValueError:
+        ap.error(f"--loads-kN {text!r}: give numbers separated by commas, e.g. 20,45.4,68")
+    if not all(math.isfinite(f) and f > 0 for f in loads):
+        ap.error(f"--loads-kN {text!r}: loads must be > 0")
+    return loads
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description="F_y0(alpha) of an MF 6.1 .tir (pure side slip, camber 0)")
     ap.add_argument("tir", help="the .tir file")
@@ -155,16 +175,7 @@ def main(argv=None):
     except TirError as e:
         print(f"mf61_lateral: {e}", file=sys.stderr)
         return 2
-    # the loads: given, or around the nominal load
-    if args.loads_kN is None:
-        loads = [f * c["FNOMIN"] for f in (0.5, 1.0, 1.5)]
-    else:
-        try:
-            loads = [1e3 * float(s) for s in args.loads_kN.split(",")]
-        except ValueError:
-            ap.error(f"--loads-kN {args.loads_kN!r}: give numbers separated by commas, e.g. 20,45.4,68")
-        if not all(math.isfinite(f) and f > 0 for f in loads):
-            ap.error(f"--loads-kN {args.loads_kN!r}: loads must be > 0")
+    loads = loads_asked(ap, args.loads_kN, c["FNOMIN"])
     # the curves: alpha from -15 to 15 deg, one per load
     alpha_deg = np.linspace(-15.0, 15.0, 3001)
     alpha = np.radians(alpha_deg)

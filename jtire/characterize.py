@@ -218,14 +218,14 @@ def tire_info(plan: Plan):
 def characterization(plan: Plan, out, found: dict):
     """The rigid-ring Characterization of the finished (or partial) run: one row per grid condition,
     quantities merged from every experiment at that condition (per-pressure ones by pressure), E11's
-    sigma = k_f / k_l, and E10's curves."""
+    sigma = k_f / k_l, and E10's and E06's curves."""
     from .rigid_ring.table import Characterization, row_from_results
 
     out = Path(out)
     by_name = {e.name: e for e in plan.experiments}
     rows = []
     for c in plan.conditions:
-        parts, e10 = [], None
+        parts, e10, e06, e06_surface = [], None, None, None
         for name, res_list in found.items():
             conds = experiment_conditions(plan, by_name[name])
             for i, (cc, r) in enumerate(zip(conds, res_list)):
@@ -237,10 +237,15 @@ def characterization(plan: Plan, out, found: dict):
                 if name == "cornering":
                     s = results.read_signals(results.cases_dir(out, name) / results.case_name(i, cc))
                     e10 = None if s is None else {k: v.tolist() for k, v in s.items()}
+                if name == "traction":
+                    s = results.read_signals(results.cases_dir(out, name) / results.case_name(i, cc))
+                    e06 = None if s is None else {k: v.tolist() for k, v in s.items()}
+                    e06_surface = (r.get("info") or {}).get("surface", "drum")  # the transient runs on the drum
         q = {}
         for r in parts:
             q |= r["quantities"]
         if q.get("k_f_N_per_rad") and q.get("k_l_N_per_m"):
             parts.append({"quantities": {"sigma_m": q["k_f_N_per_rad"] / q["k_l_N_per_m"]}})
-        rows.append(row_from_results(c["load_N"], c["pressure_Pa"], parts, e10_signals=e10))
+        rows.append(row_from_results(c["load_N"], c["pressure_Pa"], parts, e10_signals=e10, e06_signals=e06,
+                                     e06_surface=e06_surface))
     return Characterization(tire_info(plan), rows)

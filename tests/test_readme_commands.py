@@ -62,6 +62,8 @@ COVERED = {
     r"jtire export-tir( \S+)*": "test_export_tir",
     r"python examples/mf61_lateral\.py runs/characterize/tire\.tir --out runs/fy_alpha\.png":
         "test_tutorial_tir::test_tutorial_tir_commands",
+    r"python examples/mf61_longitudinal\.py runs/characterize/tire\.tir --curves runs/characterize/characterization\.json "
+    r"--out runs/fx_kappa\.png": "test_tutorial_tir::test_tutorial_longitudinal_command",
     r"jtire reproduce(( --quick)? --out runs/study(_quick)?)?": "test_readme_workflows::test_reproduce_quick",
     r"jtire new-tire( 295/75R22\.5( --measured configs/data/measurements_example\.csv --force)?)?": "test_readme_workflows::test_new_tire_commands",
     r"jtire run tires/295_75R22\.5/run\.toml": "test_readme_workflows::test_new_tire_commands",
@@ -280,6 +282,9 @@ def test_characterize_one_condition_validated(user_dir, capsys):
     # E13 ran, and the ring's k_bx comes from it (not from the isotropy assumption)
     rows = json.loads((out / "in_plane.json").read_text())["rows"]
     assert rows and all(r["k_bx_N_per_m"] > 0 and r["k_bx_source"] == "E13" for r in rows)
+    # E06's force-slip curve is in the characterization, and the .tir's pure-longitudinal keys are fitted to it
+    assert all(len(r["E06_curves"]["slip"]) >= 4 for r in char["rows"])
+    assert re.search(r"^PCX1\s+= [-0-9.e+]+\s+\$fitted to E06's force-slip curves", tir, re.M)
     assert "[INERTIA]" in tir and re.search(r"^MASS\s+= [0-9.]+ ", tir.split("[INERTIA]")[1], re.M)
 
 

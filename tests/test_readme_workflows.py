@@ -31,6 +31,10 @@ def test_reproduce_quick(user_dir, capsys):
     rows = json.loads((out / "characterize" / "in_plane.json").read_text())["rows"]
     assert rows and all(r["k_bx_N_per_m"] > 0 and r["k_bx_source"] == "E13" for r in rows)
     assert "| metric | shell | ring |" in (out / "characterize" / "validation.md").read_text()
+    # E06's force-slip curve is in the characterization, and the .tir's pure-longitudinal keys are fitted to it
+    char = json.loads((out / "characterize" / "characterization.json").read_text())
+    assert all(len(r["E06_curves"]["slip"]) >= 4 for r in char["rows"])
+    assert re.search(r"^PCX1\s+= [-0-9.e+]+\s+\$fitted to E06's force-slip curves", tir, re.M)
     scripts = sorted(p.stem for p in (REPO / "paper_figures").glob("fig*.py"))
     assert sorted(p.stem for p in (out / "figures").glob("*.png")) == scripts
     report = (out / "report.md").read_text()

@@ -1,5 +1,6 @@
-"""The tutorial "Read the .tir into a vehicle model" (docs/tutorials/tir.md) and its script
-examples/mf61_lateral.py: an MF 6.1 reader and F_y0(alpha) evaluator written without jtire.
+"""The tutorial "Read the .tir into a vehicle model" (docs/tutorials/tir.md) and its scripts
+examples/mf61_lateral.py (an MF 6.1 reader and F_y0(alpha) evaluator written without jtire) and
+examples/mf61_longitudinal.py (F_x0(kappa) on the same reader, against the simulated E06 curves).
 
 Fast: the .tir comes from the synthetic characterization the rigid-ring tests use (no shell
 simulation), exported by `jtire export-tir` as a user runs it. References and tolerances:
@@ -73,12 +74,16 @@ def tir_path(tmp_path_factory):
     return d / "tire.tir"
 
 
-@pytest.fixture(scope="module")
-def script():
-    spec = importlib.util.spec_from_file_location("mf61_lateral", SCRIPT)
+def load_script(path):
+    spec = importlib.util.spec_from_file_location(path.stem, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+@pytest.fixture(scope="module")
+def script():
+    return load_script(SCRIPT)
 
 
 def jtire_reference(path):
@@ -208,3 +213,86 @@ def test_tutorial_tir_commands(tmp_path):
     assert (tmp_path / "runs" / "fy_alpha.png").stat().st_size > 40_000
     shown = next(b for b in blocks if b.strip().startswith("runs/characterize/tire.tir: FITTYP"))
     assert r.stdout.strip() == shown.strip()
+
+
+# ---- examples/mf61_longitudinal.py ------------------------------------------------------------------------
+SCRIPT_X = REPO / "examples" / "mf61_longitudinal.py"
+COMMAND_X = ("python examples/mf61_longitudinal.py runs/characterize/tire.tir --curves "
+             "runs/characterize/characterization.json --out runs/fx_kappa.png")
+PERTURBED_X = {"PHX1": 0.004, "PHX2": -0.002, "PVX1": 0.01, "PVX2": -0.005, "PEX4": 0.2, "LKX": 1.1, "LMUX": 0.9}
+
+
+@pytest.fixture(scope="module")
+def script_x():
+    return load_script(SCRIPT_X)
+
+
+def test_longitudinal_script_is_independent_of_jtire():
+    tree = ast.parse(SCRIPT_X.read_text())
+    mods = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    mods |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert mods <= {"argparse", "json", "math", "sys", "pathlib", "numpy", "matplotlib", "mf61_lateral"}, mods
+
+
+@pytest.mark.parametrize("values", [{}, {k: v for k, v in PERTURBED_X.items() if not k.startswith("L")}],
+                         ids=["jtire_file", "every_term_on"])
+def test_longitudinal_agrees_with_jtire_magic_formula(script_x, tir_path, tmp_path, values):
+    """F_x0 and K_xk of the script = jtire's mf_longitudinal on jtire's reader, 1e-9 (nominal pressure)."""
+    from jtire.rigid_ring import mf_longitudinal as mfx
+
+    path = tmp_path / "t.tir"
+    path.write_text(with_values(tir_path.read_text(), values))
+    t = jtir.read(path)
+    c_ref = t["LONGITUDINAL_COEFFICIENTS"]
+    nom = mf.Nominal(t["VERTICAL"]["FNOMIN"], t["OPERATING_CONDITIONS"]["NOMPRES"], t["DIMENSION"]["UNLOADED_RADIUS"])
+    c = script_x.coefficients(path, script_x.parse_tir(path))
+    fz, kappa = np.meshgrid(np.array([0.4, 0.5, 1.0, 1.5, 1.8]) * nom.fnomin, [-0.3, -0.05, 0.0, 0.01, 0.08, 0.15, 0.3])
+    ref = mfx.fx0(c_ref, nom, fz, kappa)
+    np.testing.assert_allclose(script_x.longitudinal(c, fz, kappa)["fx"], ref, rtol=1e-9, atol=1e-9 * np.max(np.abs(ref)))
+    np.testing.assert_allclose(script_x.longitudinal(c, fz[0], 0.0)["kxk"], mfx.slip_stiffness(c_ref, nom, fz[0]),
+                               rtol=1e-12)
+
+
+def test_longitudinal_scaling_factors_apply(script_x, tir_path, tmp_path):
+    """LKX scales K_xk (4.E15), LMUX the peak D_x (4.E13)."""
+    path = tmp_path / "t.tir"
+    path.write_text(with_values(tir_path.read_text(), {"LKX": 1.3, "LMUX": 0.8}))
+    c0 = script_x.coefficients(tir_path, script_x.parse_tir(tir_path))
+    c = script_x.coefficients(path, script_x.parse_tir(path))
+    p0, p = script_x.longitudinal(c0, 40e3, 0.0), script_x.longitudinal(c, 40e3, 0.0)
+    assert p["kxk"] == pytest.approx(1.3 * p0["kxk"], rel=1e-12) and p["dx"] == pytest.approx(0.8 * p0["dx"], rel=1e-12)
+
+
+@pytest.mark.parametrize("case", ["missing_file", "no_PKX1", "missing_curves"])
+def test_longitudinal_bad_input_exits_2(tir_path, tmp_path, case):
+    path, extra, named = tmp_path / f"{case}.tir", [], None
+    text = tir_path.read_text()
+    if case == "no_PKX1":
+        path.write_text(re.sub(r"^PKX1\s*=.*\n", "", text, flags=re.MULTILINE))
+        named = "PKX1"
+    elif case == "missing_curves":
+        path.write_text(text)
+        extra, named = ["--curves", tmp_path / "none.json"], str(tmp_path / "none.json")
+    png = tmp_path / "fx.png"
+    r = subprocess.run([sys.executable, str(SCRIPT_X), str(path), "--out", str(png), *map(str, extra)],
+                       capture_output=True, text=True, check=False, timeout=120)
+    assert r.returncode == 2 and r.stdout == "" and not png.exists()
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and (named or str(path)) in lines[0], r.stderr
+
+
+def test_tutorial_longitudinal_command(tmp_path):
+    """The page's command, as written, on the synthetic characterization and its exported .tir: one
+    comparison line per load at NOMPRES, each at round-off (the synthetic curves are MF 6.1 curves
+    plus a free-rolling drag, which the fit and the script both remove), and the PNG."""
+    page = PAGE.read_text()
+    blocks = re.split(r"^```.*$", page, flags=re.MULTILINE)[1::2]
+    assert any(COMMAND_X in b.splitlines() for b in blocks), "the page's code block with the command changed"
+    (tmp_path / "examples").symlink_to(REPO / "examples")
+    make_tir(tmp_path / "runs" / "characterize", tmp_path / "runs" / "characterize" / "tire.tir")
+    r = subprocess.run([sys.executable, *shlex.split(COMMAND_X)[1:]], cwd=tmp_path, capture_output=True, text=True,
+                       check=False, timeout=120)
+    assert r.returncode == 0, r.stderr
+    errs = [float(m.group(1)) for m in re.finditer(r"over 0-10 % slip = ([0-9.]+) % of the curve's peak", r.stdout)]
+    assert len(errs) == len(synthetic.LOADS_KG) and max(errs) < 0.01, r.stdout
+    assert (tmp_path / "runs" / "fx_kappa.png").stat().st_size > 30_000

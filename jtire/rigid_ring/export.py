@@ -6,6 +6,7 @@ from pathlib import Path
 
 from ..io import atomic_write_text
 from . import magic_formula as mf
+from . import mf_longitudinal as mfx
 from . import report, tir, trends
 
 
@@ -18,7 +19,9 @@ def export(char, out_dir, tir_name: str = "rigid_ring.tir", longvl: float = 6.70
     nom = mf.Nominal(rated.load_N, rated.pressure_Pa, char.tire.unloaded_radius_m)
     curves = mf.curves_from_characterization(char, None if all_pressures else [rated.pressure_Pa])
     fit = mf.fit_pure_lateral(curves, nom) if curves else None
-    sections, notes = tir.build(char, fit=fit, longvl=longvl, fittyp=fittyp, rated=rated)
+    slip_curves = mfx.curves_from_characterization(char)  # every pressure: PPX* need them
+    fit_x = mfx.fit_pure_longitudinal(slip_curves, nom) if slip_curves else None
+    sections, notes = tir.build(char, fit=fit, longvl=longvl, fittyp=fittyp, rated=rated, fit_x=fit_x)
     written = [tir.write(out, sections, [f"rigid ring + MF {fittyp} from {source} (jtire)"])]
     written += report.write_tables(char, out_dir)
     vs = trends.verdicts(char)
@@ -34,5 +37,13 @@ def export(char, out_dir, tir_name: str = "rigid_ring.tir", longvl: float = 6.70
                          + ("" if emz is None else f", M_z {100 * emz:.2f} %"))
     else:
         lines.append("MF fit: no E10 curves in the characterization (not fitted)")
+    if fit_x is not None:
+        lines.append(f"MF F_x fit (all pressures, free-rolling F_x removed): max |F_x,MF - F_x| over "
+                     f"0-{100 * fit_x.err_range:g} % slip = {100 * fit_x.max_error:.2f} % of peak"
+                     + ("" if fit_x.success else f" (optimizer: {fit_x.message})"))
+        for fz, p, e in fit_x.errors:
+            lines.append(f"  {fz:9.0f} N {p / 1e3:6.0f} kPa: F_x {100 * e:.2f} %")
+    else:
+        lines.append("MF F_x fit: no E06 curves in the characterization (only PKX1, PKX2, PPX1 from k_k)")
     lines += [f"note: {n}" for n in notes]
     return [Path(p) for p in written if p is not None], lines

@@ -151,21 +151,28 @@ class FitResult:
         """Why a coefficient sits on its bound, or None."""
         if key not in self.at_bound:
             return None
-        lo, hi = BOUNDS[key]
-        v = self.coefficients[key]
-        side = "upper" if abs(v - hi) <= abs(v - lo) else "lower"
-        why = ("K_y still proportional to F_z over the loads fitted: only PKY1 / PKY2 is identified"
-               if key == "PKY2" else "the curves do not pin it")
-        return f"at the fit's {side} bound {hi if side == 'upper' else lo:g}: {why}"
+        return on_bound(self.coefficients[key], BOUNDS[key],
+                        "K_y still proportional to F_z over the loads fitted: only PKY1 / PKY2 is identified"
+                        if key == "PKY2" else "the curves do not pin it")
+
+
+def on_bound(value, bounds, why) -> str:
+    """'at the fit's upper (lower) bound B: why' for a coefficient that ended on a bound (lo, hi)."""
+    lo, hi = bounds
+    upper = abs(value - hi) <= abs(value - lo)
+    return f"at the fit's {'upper' if upper else 'lower'} bound {hi if upper else lo:g}: {why}"
 
 
 def _to_iso(d: CurveData):
     return np.radians(-np.asarray(d.alpha_deg, float)), -np.asarray(d.fy, float), (None if d.mz is None else -np.asarray(d.mz, float))
 
 
-def _lsq(names, fixed, resid_of):
-    lo = np.array([BOUNDS[n][0] for n in names])
-    hi = np.array([BOUNDS[n][1] for n in names])
+def bounded_lsq(names, fixed, resid_of, bounds=None):
+    """Bounded least squares over the coefficients `names` (the rest as in `fixed`); bounds: {key: (lo,
+    hi)} (default BOUNDS)."""
+    bounds = BOUNDS if bounds is None else bounds
+    lo = np.array([bounds[n][0] for n in names])
+    hi = np.array([bounds[n][1] for n in names])
     x0 = np.clip(np.array([fixed[n] for n in names]), lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
 
     def resid(x):
@@ -225,7 +232,7 @@ def fit_pure_lateral(data, nominal: Nominal, fit_pkY4=False, fit_shifts=None, fi
     def resid_fy(c):
         return np.concatenate([(fy0(c, nominal, d.fz, a, d.p) - f) / pk for d, (a, f, _), pk in zip(data, iso, peak_fy)])
 
-    sol = _lsq(names, c0, resid_fy)
+    sol = bounded_lsq(names, c0, resid_fy)
     coef = c0 | dict(zip(names, map(float, sol.x)))
     ok, msg = bool(sol.success), f"F_y: {sol.message}"
 
@@ -252,7 +259,7 @@ def fit_pure_lateral(data, nominal: Nominal, fit_pkY4=False, fit_shifts=None, fi
             return np.concatenate([(mz0(c, nominal, data[i].fz, iso[i][0], data[i].p) - iso[i][2]) / peak_mz[i]
                                    for i in have_mz])
 
-        sol_m = _lsq(mz_names, coef, resid_mz)
+        sol_m = bounded_lsq(mz_names, coef, resid_mz)
         coef |= dict(zip(mz_names, map(float, sol_m.x)))
         ok = ok and bool(sol_m.success)
         msg += f"; M_z: {sol_m.message}"

@@ -5,6 +5,8 @@ NOT simulation output: every number is a smooth made-up law around the study's r
 assumption (damping ratios 0.03-0.05, sidewall stiffnesses giving FREQ_* of 20-45 Hz), and the E10
 curves come from a known MF 6.1 coefficient set (`TRUE_MF`), so a fit must recover it. The
 trends are the physical ones (stiffnesses rise with pressure, the footprint lengthens with load...).
+The E06 force-slip curves come from `TRUE_MF_X` plus a free-rolling drag of 0.6 % of F_z (the fit
+must remove it); their slope at zero slip is near, not equal to, the row's k_k law.
 """
 
 import dataclasses
@@ -13,7 +15,8 @@ import numpy as np
 
 from .. import units as U
 from .magic_formula import Nominal, cornering_stiffness, fy0, mz0
-from .table import Characterization, ConditionRow, E10Curves, TireInfo
+from .mf_longitudinal import fx0
+from .table import Characterization, ConditionRow, E06Curves, E10Curves, TireInfo
 
 LOADS_KG = (2312.5, 4625.0, 6937.5)
 PRESSURES_PSI = (70.0, 120.0, 150.0)
@@ -24,6 +27,11 @@ TRUE_MF = {"PCY1": 1.35, "PDY1": 0.85, "PDY2": -0.12, "PEY1": -0.6, "PEY2": -0.2
            "PKY4": 2.0, "PPY1": 0.3, "PPY2": 0.6, "PPY3": -0.1, "PPY4": 0.05,
            "QBZ1": 9.0, "QBZ2": -1.5, "QCZ1": 1.25, "QDZ1": 0.075, "QDZ2": -0.012, "QEZ1": -1.5, "QEZ2": -0.4,
            "PPZ1": 0.4}
+# pure longitudinal slip (ISO, driving side), every load and pressure term non-zero
+TRUE_MF_X = {"PCX1": 1.6, "PDX1": 0.9, "PDX2": -0.08, "PEX1": 0.3, "PEX2": 0.1, "PEX3": -0.05, "PKX1": 24.0,
+             "PKX2": -3.0, "PKX3": 0.2, "PPX1": -0.3, "PPX2": 0.2, "PPX3": -0.1, "PPX4": 0.05}
+E06_SLIPS = tuple(np.round(np.linspace(0.0, 0.2, 21), 12))
+FREE_ROLLING_DRAG = 0.006  # of F_z: F_x at zero slip is -0.006 F_z (the rolling resistance)
 
 
 def _xi_c(xi, k, m):
@@ -31,9 +39,10 @@ def _xi_c(xi, k, m):
 
 
 def row(tire: TireInfo, load_kg: float, pressure_psi: float, mf=None, angles_deg=E10_ANGLES_DEG,
-        damping_spread: float = 0.04) -> ConditionRow:
+        damping_spread: float = 0.04, slips=E06_SLIPS) -> ConditionRow:
     """One synthetic condition. damping_spread: relative gap put between the two-peak and the
-    fitted damping values (two-peak = fit x (1 + spread))."""
+    fitted damping values (two-peak = fit x (1 + spread)); slips: the E06 curve's slips (None: no
+    E06 curve)."""
     mf = TRUE_MF if mf is None else mf
     fz, p = load_kg * U.G0, pressure_psi * U.PSI
     pr = p / tire.rated_pressure_Pa
@@ -70,15 +79,20 @@ def row(tire: TireInfo, load_kg: float, pressure_psi: float, mf=None, angles_deg
         q[f"{stem}_{unit}"] = c_fit * (1 + damping_spread)
     curves = E10Curves(slip_angle_deg=np.asarray(angles_deg, float), lateral_force_N=fy_sae, M_z_SAE_Nm=mz_sae,
                        F_z_N=np.full(alpha.shape, fz), F_y_SAE_N=fy_sae)
-    return ConditionRow(fz, p, q, curves)
+    slip = None
+    if slips is not None:
+        k = np.asarray(slips, float)
+        slip = E06Curves(slip=k, force_x_N=fx0(TRUE_MF_X, nom, fz, k, p) - FREE_ROLLING_DRAG * fz,
+                         force_z_N=np.full(k.shape, fz), surface="flat")
+    return ConditionRow(fz, p, q, curves, slip)
 
 
 
 def characterization(tire: TireInfo | None = None, loads_kg=LOADS_KG, pressures_psi=PRESSURES_PSI, mf=None,
-                     angles_deg=E10_ANGLES_DEG) -> Characterization:
+                     angles_deg=E10_ANGLES_DEG, slips=E06_SLIPS) -> Characterization:
     """The full synthetic grid (default 3 loads x 3 pressures) for the study's tire."""
     tire = TireInfo.from_reference() if tire is None else tire
-    rows = tuple(row(tire, lk, pp, mf, angles_deg) for lk in loads_kg for pp in pressures_psi)
+    rows = tuple(row(tire, lk, pp, mf, angles_deg, slips=slips) for lk in loads_kg for pp in pressures_psi)
     return Characterization(tire, rows)
 
 

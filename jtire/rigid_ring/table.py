@@ -19,7 +19,9 @@ the reader ignores it):
                 "k_sv_N_per_m": 1.28e6, "C_tot_2p_Ns_per_m": 1190.0, ...,   # any of QUANTITIES
                 "E10_curves": {"slip_angle_deg": [...], "lateral_force_N": [...],  # SAE, road axes
                                "M_z_SAE_Nm": [...], "F_z_N": [...],
-                               "F_y_SAE_N": [...], "F_x_N": [...]}}, ...]   # the last two optional
+                               "F_y_SAE_N": [...], "F_x_N": [...]},   # the last two optional
+                "E06_curves": {"slip": [...], "force_x_N": [...],   # ISO, > 0 driving
+                               "force_z_N": [...], "surface": "drum"}}, ...]   # the last two optional
     }
 
 `read_characterization(path)` takes that file or a folder holding it. `row_from_results` merges
@@ -98,6 +100,8 @@ EXTRA_KEYS = ("deflection_m", "first_mode_fit_fn_Hz", "first_mode_xi", "k_dv_fit
               "omega_n_in_contact_fit_rad_per_s")
 CURVE_KEYS = ("slip_angle_deg", "lateral_force_N", "M_z_SAE_Nm", "F_z_N", "F_y_SAE_N", "F_x_N")
 CURVE_REQUIRED = ("slip_angle_deg", "lateral_force_N")
+SLIP_CURVE_KEYS = ("slip", "force_x_N", "force_z_N")
+SLIP_CURVE_REQUIRED = ("slip", "force_x_N")
 
 
 def variant_keys(q: Quantity) -> tuple:
@@ -162,6 +166,20 @@ class TireInfo:
         return cls(**{n: d[n] for n in names})
 
 
+def _curve_arrays(d: dict, keys, required, where) -> dict:
+    """{key: 1-D float array or None} of a curve dict; the required keys present, every array as long
+    as the first key's."""
+    for k in required:
+        if k not in d or d[k] is None:
+            raise ConfigError(f"{where}.{k}: missing (needed: {list(required)})")
+    arrs = {k: None if d.get(k) is None else np.asarray(d[k], float) for k in keys}
+    n = arrs[keys[0]].shape
+    for k, v in arrs.items():
+        if v is not None and (v.ndim != 1 or v.shape != n):
+            raise ConfigError(f"{where}.{k}: must be a list of {n[0]} numbers like {keys[0]}")
+    return arrs
+
+
 @dataclasses.dataclass(frozen=True)
 class E10Curves:
     """Steady cornering curves of one condition, SAE signs: slip_angle_deg (n,), lateral_force_N
@@ -176,15 +194,7 @@ class E10Curves:
 
     @classmethod
     def from_dict(cls, d: dict, where: str = "E10_curves") -> "E10Curves":
-        for k in CURVE_REQUIRED:
-            if k not in d or d[k] is None:
-                raise ConfigError(f"{where}.{k}: missing (needed: {list(CURVE_REQUIRED)})")
-        arrs = {k: None if d.get(k) is None else np.asarray(d[k], float) for k in CURVE_KEYS}
-        n = arrs["slip_angle_deg"].shape
-        for k, v in arrs.items():
-            if v is not None and (v.ndim != 1 or v.shape != n):
-                raise ConfigError(f"{where}.{k}: must be a list of {n[0]} numbers like slip_angle_deg")
-        return cls(**arrs)
+        return cls(**_curve_arrays(d, CURVE_KEYS, CURVE_REQUIRED, where))
 
     def wheel_lateral_force(self) -> tuple:
         """(F_y in wheel axes, SAE sign (n,), source): F_y_SAE_N when given; else from the road-axis
@@ -202,11 +212,35 @@ class E10Curves:
 
 
 @dataclasses.dataclass(frozen=True)
+class E06Curves:
+    """Steady force-slip curve of one condition (E06), ISO signs: slip kappa (n,) (> 0 driving),
+    force_x_N (n,) (> 0 forward), force_z_N (n,) or None; surface: "drum" or "flat" (None: not said)."""
+
+    slip: np.ndarray
+    force_x_N: np.ndarray
+    force_z_N: np.ndarray | None = None
+    surface: str | None = None
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "E06_curves") -> "E06Curves":
+        arrs = _curve_arrays(d, SLIP_CURVE_KEYS, SLIP_CURVE_REQUIRED, where)
+        surface = d.get("surface")
+        if surface is not None and surface not in ("drum", "flat"):
+            raise ConfigError(f"{where}.surface = {surface!r}: must be \"drum\" or \"flat\"")
+        return cls(**arrs, surface=surface)
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in SLIP_CURVE_KEYS if getattr(self, k) is not None}
+        return d | ({} if self.surface is None else {"surface": self.surface})
+
+
+@dataclasses.dataclass(frozen=True)
 class ConditionRow:
     load_N: float
     pressure_Pa: float
     q: dict  # quantity key -> float (missing keys: not measured)
     curves: E10Curves | None = None
+    slip_curves: E06Curves | None = None
 
     def get(self, key):
         v = self.q.get(key)
@@ -251,6 +285,8 @@ class Characterization:
             d |= {k: v for k, v in r.q.items() if v is not None}
             if r.curves is not None:
                 d["E10_curves"] = r.curves.to_dict()
+            if r.slip_curves is not None:
+                d["E06_curves"] = r.slip_curves.to_dict()
             rows.append(d)
         quantities = {q.key: {"symbol": q.symbol, "unit": q.unit, "experiment": q.experiment, "meaning": q.meaning}
                       for q in QUANTITIES}
@@ -274,7 +310,7 @@ def _row_from_dict(d: dict, i: int) -> ConditionRow:
     known = set(all_keys())
     q = {}
     for k, v in d.items():
-        if k in ("load_N", "pressure_Pa", "E10_curves"):
+        if k in ("load_N", "pressure_Pa", "E10_curves", "E06_curves"):
             continue
         if k not in known:
             continue  # other experiment outputs are carried by result.json, not needed here
@@ -282,7 +318,8 @@ def _row_from_dict(d: dict, i: int) -> ConditionRow:
             raise ConfigError(f"{where}.{k} = {v!r}: must be a number or null")
         q[k] = None if v is None else float(v)
     curves = None if d.get("E10_curves") is None else E10Curves.from_dict(d["E10_curves"], f"{where}.E10_curves")
-    return ConditionRow(float(d["load_N"]), float(d["pressure_Pa"]), q, curves)
+    slip = None if d.get("E06_curves") is None else E06Curves.from_dict(d["E06_curves"], f"{where}.E06_curves")
+    return ConditionRow(float(d["load_N"]), float(d["pressure_Pa"]), q, curves, slip)
 
 
 def characterization_from_dict(d: dict) -> Characterization:
@@ -319,12 +356,14 @@ def write_characterization(path, char: Characterization) -> Path:
     return atomic_write_json(p, char.to_dict())
 
 
-def row_from_results(load_N: float, pressure_Pa: float, results, e10_signals: dict | None = None) -> ConditionRow:
+def row_from_results(load_N: float, pressure_Pa: float, results, e10_signals: dict | None = None,
+                     e06_signals: dict | None = None, e06_surface: str | None = None) -> ConditionRow:
     """One condition row from experiments' results: `results` is an iterable of result.json dicts
     (or ExperimentResult.to_json_dict()); their "quantities" are merged (known keys only; a later
     result overrides an earlier one, except that a value from the quantity's own experiment, named by
     the result's "study_id" (e.g. k_sv from E02, not E04's rest deflection), is never overridden). e10_signals: the E10 signals dict (its CURVE_KEYS are kept;
-    M_z_SAE_Nm may come under aligning_moment_Nm)."""
+    M_z_SAE_Nm may come under aligning_moment_Nm); e06_signals: the E06 signals dict (its
+    SLIP_CURVE_KEYS are kept) and e06_surface the surface it ran on."""
     known = set(all_keys())
     source = {k: qq.experiment for qq in QUANTITIES for k in (qq.key, *(variant_keys(qq) if qq.damping else ()))}
     q, from_source = {}, set()
@@ -344,4 +383,7 @@ def row_from_results(load_N: float, pressure_Pa: float, results, e10_signals: di
         if "M_z_SAE_Nm" not in s and "aligning_moment_Nm" in s:
             s["M_z_SAE_Nm"] = s["aligning_moment_Nm"]
         curves = E10Curves.from_dict({k: s.get(k) for k in CURVE_KEYS})
-    return ConditionRow(float(load_N), float(pressure_Pa), q, curves)
+    slip = None
+    if e06_signals:
+        slip = E06Curves.from_dict({k: e06_signals.get(k) for k in SLIP_CURVE_KEYS} | {"surface": e06_surface})
+    return ConditionRow(float(load_N), float(pressure_Pa), q, curves, slip)

@@ -12,7 +12,8 @@ Load/pressure laws fitted here (MF 6.1/6.2 forms, TyreDyn stiffness_mf6x / conta
   C_z = VERTICAL_STIFFNESS (1 + PFZ1 dpi);  C_y = LATERAL_STIFFNESS (1 + PCFY1 dfz + PCFY2 dfz^2)
   (1 + PCFY3 dpi), C_x likewise with PCFX*;  a/R0 = Q_RA2 rho/R0 + Q_RA1 sqrt(rho/R0);
   b/W = Q_RB1 (rho/R0)^(1/3) (Q_RB2 = 0), rho = F_z / k_sv, a and b the half length and width;
-  K_xk = F_z (PKX1 + PKX2 dfz)(1 + PPX1 dpi).
+  pure longitudinal slip (PCX1 ... PPX4): the MF fit to E06's force-slip curves
+  (`mf_longitudinal`); without curves only K_xk = F_z (PKX1 + PKX2 dfz)(1 + PPX1 dpi) from k_k.
 """
 
 import math
@@ -23,6 +24,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..io import atomic_write_text
 from . import magic_formula as mf
+from . import mf_longitudinal as mfx
 from .params import derive
 
 SECTIONS = (
@@ -97,12 +99,14 @@ def _near(x, ref):
     return math.isclose(x, ref, rel_tol=1e-6)
 
 
-def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None):
+def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
     """Values of every key: {section: [(key, value, comment)]} and a list of notes (magnitudes that
     depart from public .tir files, fallbacks used). char: Characterization; fit: a
     magic_formula.FitResult (None: fitted here to the E10 curves at the nominal pressure, or the
-    lateral/aligning coefficients stay default when there are none); longvl: speed of the E10 runs
-    (m/s; default 15 mph); rated: the ConditionRow taken as nominal (default char.rated_row())."""
+    lateral/aligning coefficients stay default when there are none); fit_x: a
+    mf_longitudinal.LongitudinalFit (None: fitted here to every row's E06 curves, or only the slip
+    stiffness PKX1, PKX2, PPX1 from k_k when there are none); longvl: speed of the E10 runs (m/s;
+    default 15 mph); rated: the ConditionRow taken as nominal (default char.rated_row())."""
     if fittyp not in (61, 62):
         raise ConfigError(f"fittyp = {fittyp}: must be 61 or 62")
     t = char.tire
@@ -195,16 +199,43 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None):
     put("PRESMIN", min(r.pressure_Pa for r in char.rows), "lowest characterized pressure")
     put("PRESMAX", max(r.pressure_Pa for r in char.rows), "highest characterized pressure")
     put("FZMAX", max(r.load_N for r in char.rows), "highest characterized load")
-    # longitudinal slip stiffness K_xk = F_z (PKX1 + PKX2 dfz)(1 + PPX1 dpi)
+    # pure longitudinal slip: the MF fit to E06's force-slip curves, else the slip stiffness alone,
+    # K_xk = F_z (PKX1 + PKX2 dfz)(1 + PPX1 dpi)
+    if fit_x is None:
+        slip_curves = mfx.curves_from_characterization(char)
+        if slip_curves:
+            fit_x = mfx.fit_pure_longitudinal(slip_curves, mf.Nominal(fz0, p0, R0))
     kk = [((d.load_N - fz0) / fz0, d.k_k / d.load_N) for d in ds_p if d.k_k is not None]
-    if len(kk) >= 2:
+    if fit_x is not None:
+        surfaces = sorted({s for s in (r.slip_curves.surface for r in char.rows if r.slip_curves is not None) if s})
+        where = f"E06's force-slip curves ({len(fit_x.errors)} conditions, {'/'.join(surfaces) or 'surface not recorded'})"
+        err = f"max F_x error {100 * fit_x.max_error:.2g} % of peak over 0-{100 * fit_x.err_range:g} %"
+        for k in mfx.FX_KEYS:
+            bound = fit_x.bound_note(k)
+            if bound:
+                notes.append(f"{k} {bound}")
+            if k in fit_x.fitted:
+                put(k, fit_x.coefficients[k], f"fitted to {where}; {err}" + (f"; {bound}" if bound else ""))
+            elif k in ("PVX1", "PHX1"):
+                put(k, fit_x.coefficients[k], "0: E06's free-rolling F_x (the rolling resistance on its surface) is "
+                    "removed before the fit; MF carries it in M_y")
+            elif k == "PEX4":
+                put(k, fit_x.coefficients[k], "0: only the driving side (kappa > 0) is simulated; braking taken as symmetric")
+            else:
+                put(k, fit_x.coefficients[k], "fixed in the E06 fit (the data do not identify it)")
+        kmax = max(float(np.max(r.slip_curves.slip)) for r in char.rows if r.slip_curves is not None)
+        put("KPUMIN", -kmax, "widest E06 slip (driving side, mirrored)")
+        put("KPUMAX", kmax, "widest E06 slip")
+        if not any(fit_x.peak_reached):
+            notes.append(f"no E06 curve reaches its peak within {100 * kmax:.3g} % slip: PDX1/PCX1 extrapolate the friction level")
+    elif len(kk) >= 2:
         c = _lstsq([[1.0] * len(kk), [x for x, _ in kk]], [y for _, y in kk])
         put("PKX1", c[0], f"k_k/F_z (E06) vs load at {p0 / 1e3:.0f} kPa")
         put("PKX2", c[1], "see PKX1")
     elif d0.k_k is not None:
         put("PKX1", d0.k_k / fz0, f"k_k/F_z (E06) at {at}")
     kp = [((d.pressure_Pa - p0) / p0, d.k_k) for d in ds_l if d.k_k is not None]
-    if d0.k_k and any(abs(x) > 0 for x, _ in kp):
+    if fit_x is None and d0.k_k and any(abs(x) > 0 for x, _ in kp):
         put("PPX1", _lstsq([[x for x, _ in kp]], [v / d0.k_k - 1 for _, v in kp])[0], "k_k vs pressure (E06)")
     # lateral and aligning: the MF fit
     if fit is None:
