@@ -100,7 +100,9 @@ def test_tir_longitudinal_keys_reproduce_the_e06_curves(tmp_path, char):
     assert back["LONG_SLIP_RANGE"]["KPUMAX"] == pytest.approx(0.2)
     nom = mf.Nominal(back["VERTICAL"]["FNOMIN"], back["OPERATING_CONDITIONS"]["NOMPRES"],
                      back["DIMENSION"]["UNLOADED_RADIUS"])
-    for r in char.rows:  # the curve less its free-rolling drag, at every load and pressure
+    fitted = [r for r in char.rows if r.pressure_Pa == nom.nompres]  # the default fit: nominal pressure
+    assert len(fitted) == 3 and "3 conditions" in comments["PKX1"] and coef["PPX1"] == 0.0
+    for r in fitted:  # the curve less its free-rolling drag, at every load
         sc = r.slip_curves
         want = sc.force_x_N - sc.force_x_N[0]
         got = mfx.fx0(coef, nom, r.load_N, sc.slip, r.pressure_Pa)

@@ -11,7 +11,7 @@ def add_arguments(parser) -> None:
                         help="LONGVL: speed of the E10 runs, m/s (default 6.7056 = 15 mph)")
     parser.add_argument("--fittyp", type=int, choices=(61, 62), default=61, help="FITTYP written (default 61)")
     parser.add_argument("--all-pressures", action="store_true",
-                        help="fit the MF to the curves at every pressure (PPY1..4, PPZ1); default: nominal only")
+                        help="fit the MF to the curves at every pressure (PPY1..4, PPZ1, PPX1..4); default: nominal only")
 
 
 def run_cli(args, say) -> int:

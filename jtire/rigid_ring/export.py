@@ -19,7 +19,7 @@ def export(char, out_dir, tir_name: str = "rigid_ring.tir", longvl: float = 6.70
     nom = mf.Nominal(rated.load_N, rated.pressure_Pa, char.tire.unloaded_radius_m)
     curves = mf.curves_from_characterization(char, None if all_pressures else [rated.pressure_Pa])
     fit = mf.fit_pure_lateral(curves, nom) if curves else None
-    slip_curves = mfx.curves_from_characterization(char)  # every pressure: PPX* need them
+    slip_curves = mfx.curves_from_characterization(char, None if all_pressures else [rated.pressure_Pa])
     fit_x = mfx.fit_pure_longitudinal(slip_curves, nom) if slip_curves else None
     sections, notes = tir.build(char, fit=fit, longvl=longvl, fittyp=fittyp, rated=rated, fit_x=fit_x)
     written = [tir.write(out, sections, [f"rigid ring + MF {fittyp} from {source} (jtire)"])]
@@ -38,7 +38,8 @@ def export(char, out_dir, tir_name: str = "rigid_ring.tir", longvl: float = 6.70
     else:
         lines.append("MF fit: no E10 curves in the characterization (not fitted)")
     if fit_x is not None:
-        lines.append(f"MF F_x fit (all pressures, free-rolling F_x removed): max |F_x,MF - F_x| over "
+        lines.append(f"MF F_x fit ({'all pressures' if all_pressures else 'nominal pressure'}, free-rolling F_x "
+                     f"removed): max |F_x,MF - F_x| over "
                      f"0-{100 * fit_x.err_range:g} % slip = {100 * fit_x.max_error:.2f} % of peak"
                      + ("" if fit_x.success else f" (optimizer: {fit_x.message})"))
         for fz, p, e in fit_x.errors:

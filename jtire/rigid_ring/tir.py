@@ -104,8 +104,8 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
     depart from public .tir files, fallbacks used). char: Characterization; fit: a
     magic_formula.FitResult (None: fitted here to the E10 curves at the nominal pressure, or the
     lateral/aligning coefficients stay default when there are none); fit_x: a
-    mf_longitudinal.LongitudinalFit (None: fitted here to every row's E06 curves, or only the slip
-    stiffness PKX1, PKX2, PPX1 from k_k when there are none); longvl: speed of the E10 runs (m/s;
+    mf_longitudinal.LongitudinalFit (None: fitted here to the E06 curves at the nominal pressure, or
+    only the slip stiffness PKX1, PKX2, PPX1 from k_k when there are none); longvl: speed of the E10 runs (m/s;
     default 15 mph); rated: the ConditionRow taken as nominal (default char.rated_row())."""
     if fittyp not in (61, 62):
         raise ConfigError(f"fittyp = {fittyp}: must be 61 or 62")
@@ -202,7 +202,7 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
     # pure longitudinal slip: the MF fit to E06's force-slip curves, else the slip stiffness alone,
     # K_xk = F_z (PKX1 + PKX2 dfz)(1 + PPX1 dpi)
     if fit_x is None:
-        slip_curves = mfx.curves_from_characterization(char)
+        slip_curves = mfx.curves_from_characterization(char, pressures=[p0])
         if slip_curves:
             fit_x = mfx.fit_pure_longitudinal(slip_curves, mf.Nominal(fz0, p0, R0))
     kk = [((d.load_N - fz0) / fz0, d.k_k / d.load_N) for d in ds_p if d.k_k is not None]
