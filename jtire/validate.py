@@ -24,8 +24,9 @@ BELT_BAND_HZ = (40.0, 300.0)  # where the belt's vertical mode is looked for: ab
 
 
 def belt_band(t) -> tuple | None:
-    """BELT_BAND_HZ cut at the Nyquist frequency of the samples t (a default-mesh drop is saved at
-    500 Hz: 40-250 Hz), or None when nothing of the band is left. Ring and shell search the same band."""
+    """BELT_BAND_HZ cut at the Nyquist frequency of the samples t (E04 saves at drop_test.sample_rate_Hz,
+    2500 Hz by default: the whole band), or None when nothing of the band is left. Ring and shell search
+    the same band."""
     fs = 1.0 / float(np.median(np.diff(np.asarray(t, float))))
     hi = min(BELT_BAND_HZ[1], 0.5 * fs)
     return (BELT_BAND_HZ[0], hi) if hi > BELT_BAND_HZ[0] * 1.5 else None
