@@ -307,7 +307,8 @@ def _drum_fore_aft_zeta(cx, c):
            f"V = {v:.3g} m/s) gives {z_none:.3g} alone, C_btheta {z_nobx - z_none:.2g}, and C_bx = "
            f"{_n(d.C_bx, 'N s/m')} ({d.k_bx_source}) the rest: zeta_bx = {z_bx:.3g} at f_bx = {_n(f_bx, 'Hz')}")
     if not d.k_bx_measured:
-        txt += "; isotropy plus one tau = C_tot/k_sv (§3) make it stiffness-proportional"
+        txt += ("; isotropy plus one tau = C_tot/k_sv (§3) make it stiffness-proportional" if not d.dampers_identified
+                else "; isotropy: C_bx is the identified C_bz")
     state = NONE
     zs = cx.val("drum.vertical_mode_zeta", "shell")
     if zs:

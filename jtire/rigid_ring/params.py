@@ -19,7 +19,7 @@ Vertical split (§3, revised). The dynamic springs use the tangent k_vt of E02's
   E04's in-contact bounce zeta how it divides; the first spec's one time constant tau = C_tot / k_sv
   for both (C_bz = tau k_bz, C_vr = tau k_vr) is the named fallback (damping_source).
 Longitudinal sidewall spring: k_bx, C_bx measured by E13 (rigid belt pushed fore-aft, jtire's addition);
-  without E13 the first spec's isotropy assumption k_bx = k_bz, C_bx = tau k_bx, named in k_bx_source.
+  without E13 the first spec's isotropy assumption k_bx = k_bz, C_bx = C_bz, named in k_bx_source.
 Lateral tread spring (§5): 1/k_cy = 1/k_l - 1/k_by - r_b^2/k_bgamma (rim held in camber; r_b the
   belt centre's height above the road, R0 - F_z/k_vr, the ring's lever arm),
   sigma_c = k_f / k_cy, C_cy = k_cy C_l / k_l. Ill-conditioned (a difference of compliances a few
@@ -240,8 +240,9 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
         if not _ok(c_bx):
             c_bx, bx_src = times(tau, k_bx), "E13 (C_bx = tau k_bx: no decay)"
     else:
-        k_bx, c_bx = k_bz, times(tau, k_bz)
-        bx_src = None if k_bz is None else "isotropy assumption k_bx = k_bz (no E13)"
+        # isotropy: the fore-aft sidewall is the radial one, damper included (C_bz as identified above)
+        k_bx, c_bx = k_bz, split[0]
+        bx_src = None if k_bz is None else "isotropy assumption k_bx = k_bz, C_bx = C_bz (no E13)"
     if _ok(k_cx, k_bx, r_b, k_btheta):
         c_x = 1.0 / (1.0 / k_cx + 1.0 / k_bx + r_b**2 / k_btheta)
     return Derived(
