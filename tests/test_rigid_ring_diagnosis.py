@@ -238,6 +238,21 @@ def test_damping_value_and_frequency_account_for_zeta(char, rated, metric, f_met
     assert r[metric].state == dg.NONE
 
 
+def test_drop_zeta_with_the_two_test_dampers(char, rated):
+    """With C_bz, C_vr from E03 and E04 the ring's bounce has E04's in-contact zeta: a shell whose whole
+    record decays x 0.8 slower than its in-contact part explains a ring x 1.25 above it; a shell whose
+    in-contact and whole-record zeta agree does not."""
+    ch, row = _with_row(char, rated, first_mode_xi=0.03, xi_in_contact_fit=0.025, k_sv_tangent_N_per_m=None)
+    d = derive(row, ch.tire)
+    assert d.dampers_identified
+    z_in = 0.025
+    r = _explain(ch, row, {"drop.bounce_zeta": 0.8 * z_in}, {"drop.bounce_zeta": z_in})
+    x = r["drop.bounce_zeta"]
+    assert x.state == dg.FULL and "in-contact zeta 0.025" in x.text and "x 1.25 on the shell" in x.text
+    r = _explain(ch, row, {"drop.bounce_zeta": z_in}, {"drop.bounce_zeta": 1.3 * z_in})
+    assert r["drop.bounce_zeta"].state == dg.NONE and "lift-offs change the two decays differently" in r["drop.bounce_zeta"].text
+
+
 def test_drum_vertical_zeta_single_time_constant(char, rated):
     d = derive(rated, char.tire)
     f_b, z_b = dg.belt_vertical_mode(d)
