@@ -19,7 +19,7 @@ import pytest
 from jtire.rigid_ring import diagnosis as dg
 from jtire.rigid_ring import synthetic, validation
 from jtire.rigid_ring.params import derive
-from jtire.rigid_ring.table import Characterization, E10Curves
+from jtire.rigid_ring.table import Characterization
 
 
 @pytest.fixture(scope="module")
