@@ -216,7 +216,7 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
                 notes.append(f"{k} {bound}")
             if k in fit_x.fitted:
                 put(k, fit_x.coefficients[k], f"fitted to {where}; {err}" + (f"; {bound}" if bound else ""))
-            elif k in ("PVX1", "PHX1"):
+            elif k in ("PHX1", "PHX2", "PVX1", "PVX2"):
                 put(k, fit_x.coefficients[k], "0: E06's free-rolling F_x (the rolling resistance on its surface) is "
                     "removed before the fit; MF carries it in M_y")
             elif k == "PEX4":
