@@ -9,7 +9,7 @@ import jax
 import numpy as np
 import pytest
 
-from jtire import batch
+from jtire import batch, solve
 from jtire.experiments.phases import Case
 
 from .conftest import GRID, RATED, SIDEWALL, ok
@@ -81,15 +81,20 @@ def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01
     trace (and one compiled program per batch shape): only the first run of each group may trace (a
     weakly typed leaf, a drive field that is batched in one experiment and not in another, would show
     here as a second trace). A transient started from a static state (E04, E09's release, the rigid
-    belt's release: method "static") runs its phases on the same program, vmapped over its one case."""
+    belt's release: method "static") runs its phases on the same program, vmapped over its one case.
+    E04's record (2.5 kHz) is longer than the other phases' N_SAVE samples: its own group."""
     runs = [e01_grid, e01_grid_unsharded, *e01_singles, e02, e09, e04, e04_transient, e09_release, e12, e10,
             sidewall_transient, *[r for n in SIDEWALL for r in sidewall_runs[n].values()]]
     groups = {}
     for r in sorted(runs, key=lambda r: r.order):
-        key = (r.exp.name in SIDEWALL, r.devices)
+        # the saved record's length is part of the program: E04 saves at drop_test.sample_rate_Hz
+        # (2.5 kHz), every other phase N_SAVE samples
+        key = (r.exp.name in SIDEWALL, r.devices, getattr(r.exp, "n_save", solve.N_SAVE))
         groups.setdefault(key, []).append(r)
-    assert set(groups) == {(False, 2), (False, 1), (True, 1)}
-    first_sharded = min(r.order for r in groups[(False, 2)])
+    n_drop = e04.exp.n_save
+    assert n_drop != solve.N_SAVE and e04_transient.exp.n_save == n_drop
+    assert set(groups) == {(False, 2, solve.N_SAVE), (False, 1, solve.N_SAVE), (True, 1, solve.N_SAVE), (False, 1, n_drop)}
+    first_sharded = min(r.order for r in groups[(False, 2, solve.N_SAVE)])
     for key, rs in groups.items():
         # Known and not fixed: the first one-device flat-road run made after a 2-device one traces the
         # phase program twice (its inflate phase, then its load phase). Under JAX 0.10's eager vmap the
@@ -99,7 +104,7 @@ def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01
         # (which run shows it depends on the order the fixtures were first asked for: with the steady
         # tests first, E12's one-device run follows E10's 2-device grid and the second trace lands on
         # the next one-device run): the group as a whole traces once, twice after a 2-device run
-        after_sharded = key == (False, 1) and any(r.order > first_sharded for r in rs)
+        after_sharded = key[:2] == (False, 1) and any(r.order > first_sharded for r in rs)
         # a process that dropped its in-memory programs (jtire.cache: too many memory maps) traces
         # again once per group after each clear
         cleared = rs[-1].clears[1] - rs[0].clears[0]
