@@ -87,7 +87,7 @@ class LongitudinalFit:
     success: bool
     message: str
     at_bound: tuple = ()  # fitted coefficients that ended on a bound: not identified by the curves
-    peak_reached: tuple = ()  # per condition: the curve passes its maximum inside its slip range
+    peak_reached: tuple = ()  # per condition: the curve falls > 2 % of its peak after its maximum
 
     def bound_note(self, key):
         """Why a coefficient sits on its bound, or None."""
@@ -164,7 +164,7 @@ def fit_pure_longitudinal(data, nominal: Nominal, fit_pressure=None, err_range=0
         w = np.asarray(d.kappa) <= err_range + 1e-12
         e = float(np.max(np.abs(fx0(coef, nominal, d.fz, d.kappa[w], d.p) - y[w])) / pk)
         errors.append((d.fz, d.p, e))
-        reached.append(bool(np.argmax(y) < y.size - 1))
+        reached.append(bool(np.max(y) > y[-1] + 0.02 * pk))  # past its peak by more than a ripple
     at_bound = tuple(n for n in names
                      if min(abs(coef[n] - BOUNDS[n][0]), abs(coef[n] - BOUNDS[n][1])) <= 1e-6 * (BOUNDS[n][1] - BOUNDS[n][0]))
     return LongitudinalFit(coefficients=coef, fitted=tuple(names), nominal=nominal, errors=tuple(errors),
