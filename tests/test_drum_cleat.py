@@ -180,3 +180,62 @@ def test_first_mode_rises_with_pressure(spec, protocol, coarse_tire):
     f_lo, f_hi = lo.quantities["first_mode_Hz"], hi.quantities["first_mode_Hz"]
     assert f_hi > f_lo * 1.02, (f_lo, f_hi)  # 2 %: well above the interpolated-peak error (~0.1 %)
     assert np.isfinite(hi.quantities["k_dv_N_per_m"]) and hi.quantities["k_dv_N_per_m"] > 0
+
+
+def test_quasi_static_crossing_and_its_tandem_cam(e03):
+    """E03's quasi-static crossing (the rim under the constant load, frictionless, the cleat stepped
+    through the patch) and the tandem cam fitted to it. Invariants: the load is held at every level
+    (to the solver's tolerance); the tire and the drum are mirror symmetric fore and aft and nothing
+    carries history (no friction), so w(s) = w(-s) and the slope is odd (to 1e-3 of the bump, the
+    solver's tolerance on the rim height); 0 <= w <= the cleat's height (a tire under a constant load
+    cannot rise more than the bump); w = 0 at the crossing's ends (the experiment refuses a crossing
+    that does not reach the flat road on both sides: tested below). The
+    cam reproduces w to 15 % rms of its peak: the coarse ring's 110 mm segments meet the 120 mm-wide
+    cleat node by node, a jagged w(s) that a smooth cam cannot follow (3.6 % measured; 1.3 % on the
+    default ring and drum)."""
+    r = ok(e03.results[0])
+    env = r.info["enveloping"]
+    s, w, slope = (np.asarray(env[k]) for k in ("s_m", "w_m", "slope"))
+    h = float(r.info["cleat_height_m"])
+    # the Newton tolerance is 1e-6 of the load scale (1.3 x the load) at each level; a spread spans two levels
+    assert r.checks["enveloping_contact_F_z_rel_spread"] < 4e-6
+    assert np.allclose(s, -s[::-1]) and s[0] == pytest.approx(-0.30)
+    assert np.max(np.abs(w - w[::-1])) < 1e-3 * h
+    assert np.max(np.abs(slope + slope[::-1])) < 1e-3 + 1e-3 * np.max(np.abs(slope))
+    assert np.all(w > -1e-6) and np.all(w < h + 1e-6) and np.max(w) > 0.5 * h
+    assert abs(w[0]) < 1e-6 and abs(w[-1]) < 1e-6
+    q = r.quantities
+    assert q["enveloping_max_height_m"] == pytest.approx(np.max(w))
+    assert q["enveloping_fit_rms_height_m"] < 0.15 * q["enveloping_max_height_m"]
+    # the fitted cam reproduces the data it was fitted to (the quantities are its parameters)
+    from jtire import enveloping
+
+    cam = [q[k] for k in ("ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order")]
+    we, _ = (np.asarray(v) for v in enveloping._effective_many(s, *cam, float(r.info["cleat_radius_m"]), h))
+    assert np.sqrt(np.mean((we - w) ** 2)) == pytest.approx(q["enveloping_fit_rms_height_m"], rel=1e-9)
+
+
+def test_crossing_needs_the_static_method_and_bad_steps_are_refused():
+    rc = load_run_config(CONFIG, ["drum_cleat.method='transient'"])
+    assert rc.experiments[0].crossing == ()
+    assert load_run_config(CONFIG, ["drum_cleat.enveloping_range_mm=0"]).experiments[0].crossing == ()
+    assert len(load_run_config(CONFIG).experiments[0].crossing) == 61
+    with pytest.raises(ConfigError, match="enveloping_step_mm"):
+        load_run_config(CONFIG, ["drum_cleat.enveloping_range_mm=1000", "drum_cleat.enveloping_step_mm=2"])
+    with pytest.raises(ConfigError, match="enveloping_range_mm"):
+        load_run_config(CONFIG, ["drum_cleat.enveloping_range_mm=-5"])
+
+
+def test_a_crossing_that_ends_on_the_cleat_is_refused():
+    """A range too short for the tire's reach would fit the cam to a truncated bump: an error naming
+    the field, not a quietly wrong cam (the reduction on made-up levels: the rim still lifted at
+    the ends)."""
+    from jtire.errors import SimulationError
+
+    exp = load_run_config(CONFIG, ["drum_cleat.enveloping_range_mm=50"]).experiments[0]
+    s = np.asarray(exp.crossing)
+    lift = 0.01 * (1 - (s / 0.2) ** 2)  # a bump wider than the crossing
+    out = {"crossing_z": np.concatenate([[0.0], lift]),
+           "crossing_contact": np.tile([0.0, 0.0, 45e3], (len(s) + 1, 1))}
+    with pytest.raises(SimulationError, match="enveloping_range_mm"):
+        exp._crossing(out, {"a": 0.08, "z_top": -0.53})

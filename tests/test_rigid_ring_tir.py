@@ -136,14 +136,15 @@ def test_cli_export_tir(tmp_path, char, capsys):
 
 def test_compare_verdicts_and_figure(tmp_path):
     ring = {"drop.static_deflection_m": 0.0354, "drop.bounce_zeta": 0.05, "lateral.f_Hz": 10.0,
-            "drum.F_z_peak_to_peak_N": 3e4}
+            "drum.F_z_peak_to_peak_N": 2.3e4}
     shell = {"drop.static_deflection_m": 0.0354 / 1.02, "drop.bounce_zeta": 0.05 / 1.25, "lateral.f_Hz": None,
-             "drum.F_z_peak_to_peak_N": 2e4}
+             "drum.F_z_peak_to_peak_N": 2e4, "drum.F_x_peak_to_peak_N": 1e4}
     rows = {c.metric: c for c in validation.compare(shell, ring)}
     assert rows["drop.static_deflection_m"].verdict == "pass"  # +2 % within 3 %
     assert rows["drop.bounce_zeta"].verdict == "FAIL"  # +25 % beyond 20 %
     assert rows["lateral.f_Hz"].verdict == "not compared"  # no shell value
-    assert rows["drum.F_z_peak_to_peak_N"].verdict == "not compared"  # needs enveloping
+    assert rows["drum.F_z_peak_to_peak_N"].verdict == "pass"  # +15 % within 20 %
+    assert rows["drum.F_x_peak_to_peak_N"].verdict == "not compared"  # no ring value (a point contact gives none)
     assert "| drop.bounce_zeta |" in validation.markdown(rows.values())
     t = np.linspace(0, 1, 50)
     step = -1e4 * (1 - np.exp(-5 * t)) + 300 * np.sin(200 * t)  # a build-up with a ripple on it
@@ -197,3 +198,25 @@ def test_shell_drop_metrics_search_the_belt_band_below_nyquist(tmp_path, fs):
     m, _ = metrics(bounce)
     assert m["drop.belt_mode_Hz"] is None
     assert validate.belt_band(np.arange(0, 1, 1 / 50.0)) is None  # 25 Hz Nyquist: no band left
+
+
+def test_ellips_keys_come_from_the_nominal_rows_tandem_cam(char):
+    """With E03's tandem cam in the rows the CONTACT_PATCH ELLIPS keys carry it in jtire's scaling
+    (l_s/2a, a_e/R0, b_e/R0, c_e), each saying so; without it they keep their defaults."""
+    import dataclasses
+
+    from jtire.rigid_ring.table import Characterization
+
+    cam = {"ellips_shift_m": 0.1, "ellips_length_m": 0.4, "ellips_height_m": 0.15, "ellips_order": 1.5,
+           "enveloping_fit_rms_height_m": 2e-4, "enveloping_max_height_m": 0.016}
+    with_cam = Characterization(char.tire, tuple(dataclasses.replace(r, q=r.q | cam) for r in char.rows))
+    d = derive(with_cam.rated_row(), with_cam.tire)
+    assert d.ellips == (0.1, 0.4, 0.15, 1.5)
+    sections, _ = tir.build(with_cam)
+    v = {k: (val, com) for k, val, com in sections["CONTACT_PATCH"]}
+    R0 = char.tire.unloaded_radius_m
+    assert v["ELLIPS_SHIFT"][0] == pytest.approx(0.1 / (2 * d.a)) and "E03" in v["ELLIPS_SHIFT"][1]
+    assert v["ELLIPS_LENGTH"][0] == pytest.approx(0.4 / R0) and v["ELLIPS_HEIGHT"][0] == pytest.approx(0.15 / R0)
+    assert v["ELLIPS_ORDER"][0] == 1.5 and "scaling" in v["ELLIPS_LENGTH"][1]
+    plain = {k: (val, com) for k, val, com in tir.build(char)[0]["CONTACT_PATCH"]}
+    assert plain["ELLIPS_SHIFT"] == (0.8, "default: no enveloping identified") and derive(char.rated_row(), char.tire).ellips is None

@@ -39,7 +39,9 @@ class Levels(eqx.Module):
     pressure (Pa); rim_force (6,) on free rim DOFs; rim_free (6,) 1/0; rim_position (6,) for the
     held DOFs; road_height (m; NaN = keep the previous level's); road_at_contact (1: put the road
     at the lowest tread point of the previous state); friction_on (1/0); reset_shear (1: anchor
-    the tread where it is, unsheared); belt_load (6,) (only with a rigid belt).
+    the tread where it is, unsheared); belt_load (6,) (only with a rigid belt); surface_arg: a
+    number the level passes to `surface_at` besides the road height (NaN by default; E03 places its
+    cleat with it).
     """
 
     pressure: jax.Array
@@ -51,20 +53,21 @@ class Levels(eqx.Module):
     friction_on: jax.Array
     reset_shear: jax.Array
     belt_load: jax.Array
+    surface_arg: jax.Array
 
     @staticmethod
     def make(pressure, *, rim_force=None, rim_free=None, rim_position=None, road_height=np.nan,
-             road_at_contact=0.0, friction_on=1.0, reset_shear=0.0, belt_load=None, n=None):
+             road_at_contact=0.0, friction_on=1.0, reset_shear=0.0, belt_load=None, surface_arg=np.nan, n=None):
         """Levels from per-level values or scalars broadcast to n levels."""
         f = lambda v: jnp.asarray(v, jnp.float64)  # noqa: E731
-        vals = [f(pressure), f(road_height), f(road_at_contact), f(friction_on), f(reset_shear)]
+        vals = [f(pressure), f(road_height), f(road_at_contact), f(friction_on), f(reset_shear), f(surface_arg)]
         vecs = [f(np.zeros(6) if a is None else a) for a in (rim_force, rim_free, rim_position, belt_load)]
         n = n or max([v.shape[0] for v in vals if v.ndim == 1] + [v.shape[0] for v in vecs if v.ndim == 2] + [1])
         vals = [jnp.broadcast_to(v, (n,)) for v in vals]
         vecs = [jnp.broadcast_to(v, (n, 6)) for v in vecs]
-        p, h, c, fr, rs = vals
+        p, h, c, fr, rs, arg = vals
         force, free, pos, belt = vecs
-        return Levels(p, force, free, pos, h, c, fr, rs, belt)
+        return Levels(p, force, free, pos, h, c, fr, rs, belt, arg)
 
 
 def concat(*levels: Levels) -> Levels:
@@ -156,8 +159,8 @@ class Path(eqx.Module):
     road_height: jax.Array
 
 
-def flat_road_at(h):
-    """The default surface of a level: a still flat road at height h (m)."""
+def flat_road_at(h, arg=None):
+    """The default surface of a level: a still flat road at height h (m) (the level's surface_arg unused)."""
     return FlatRoad(height=h, velocity=jnp.zeros(3))
 
 
@@ -165,10 +168,11 @@ def run_levels(model, params, y0, levels: Levels, *, rigid_belt=False, opts=Newt
                surface_at=flat_road_at):
     """Solve the levels in order from state y0 (a TireState). Returns a Path.
 
-    surface_at(h) -> the surface whose top is at height h (m): a flat road (default), or e.g. a still
-    drum (E03). The last factorization of each level preconditions the next (see `newton`)."""
+    surface_at(h, arg) -> the surface whose top is at height h (m), arg the level's surface_arg: a
+    flat road (default), or e.g. a still drum with its cleat placed by arg (E03). The last
+    factorization of each level preconditions the next (see `newton`)."""
     def setup_for(lv, y, h):
-        road = surface_at(h)
+        road = surface_at(h, lv.surface_arg)
         return R.make_setup(lv.pressure, rim_force=lv.rim_force, rim_free=lv.rim_free, rim_position=lv.rim_position,
                             surface=road, anchors=anchors_of(model, y, road), friction_on=lv.friction_on,
                             belt_load=lv.belt_load if rigid_belt else None, rigid_belt=rigid_belt)
@@ -195,7 +199,7 @@ def run_levels(model, params, y0, levels: Levels, *, rigid_belt=False, opts=Newt
 def static_path(model, params, pressure, *parts: Levels, rigid_belt=False, opts=NewtonOptions(),
                 surface_at=flat_road_at):
     """Inflation from the tire at rest, then `parts` (Levels), in one scan, on the surfaces
-    `surface_at(h)` (`run_levels`). Returns a Path whose level 0 is the inflated state."""
+    `surface_at(h, arg)` (`run_levels`). Returns a Path whose level 0 is the inflated state."""
     y0 = TireState.at_rest(model, len(params.relaxation_times))
     return run_levels(model, params, y0, concat(inflate_levels(pressure), *parts), rigid_belt=rigid_belt, opts=opts,
                       surface_at=surface_at)

@@ -18,6 +18,15 @@ from level to level), and the run starts at phase 3 from that state. Method "tra
 2 by dynamic relaxation (settle damping on, settled when the kinetic energy is below the protocol's
 tolerance).
 
+Quasi-static crossing (method "static" only, `enveloping_range_mm` > 0): after the load, the same
+static program steps the cleat through the patch, contact position s from -range to +range every
+`enveloping_step_mm` (s < 0: the cleat ahead), the rim under the constant load (z free, x and the
+spin held), the contact frictionless. The rim's lift is the effective road height w(s) the tire
+feels and -F_x / F_z the effective slope (F_x, F_z the contact resultant, the cleat-free level
+subtracted); `jtire.enveloping.fit` fits the tandem elliptical cam of the rigid ring to them. Both
+ends of the crossing must find the tire off the cleat (else the range is too short: an error). The
+rolling start is the loaded state before the crossing.
+
 Axle force: the tire's force on the rim (`tire_on_rim`, what a hub dynamometer reads), exact with
 every node's inertia in it. The spectra of the drum's force on the tire and of the belt's vertical
 displacement are reported beside it: a mode has one frequency whatever the output, but each output
@@ -34,10 +43,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import enveloping
 from .. import equilibrium as EQ
 from .. import spectra
 from .. import units as U
-from ..errors import ConfigError
+from ..errors import ConfigError, SimulationError
 from ..physics.drum import Cleat, Drum, DrumWithCleat
 from ..schema import Field, check_range_pair
 from ..state import TireState
@@ -50,6 +60,9 @@ from .program import (Phase, check_phase, contact_check, f64, phase, phase_check
 from .result import ExperimentResult
 from .static_path import STATIC_LOADS, check_static_path, static_summary
 
+ENVELOPING_NAMES = ("ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order", "enveloping_fit_rms_height_m",
+                    "enveloping_max_height_m")  # the tandem cam fitted to the quasi-static crossing
+CROSSING_EDGE_M = 1e-6  # m: the crossing's ends must see the tire off the cleat (w below this)
 CROSS_ALLOWANCE = 0.06  # s: room in the impact phase for the cleat to cross the patch (2a + cleat < 0.8 m at 50 km/h)
 
 
@@ -60,13 +73,22 @@ def drum_at(radius, top_z, surface_speed=0.0):
     return Drum(radius=r, centre_x=f64(0.0), centre_z=f64(top_z) - r, omega=-f64(surface_speed) / r)
 
 
-def _drum_path(model, params, pressure, loads, drum_radius, cleat_radius, cleat_height):
+def _drum_path(model, params, pressure, loads, drum_radius, cleat_radius, cleat_height, crossing):
     """Inflation, first contact and the vertical loads `loads` (N) as static levels on the still drum,
-    its cleat at the bottom (out of reach): a Path (`static_path`)."""
-    def surface_at(h):
-        return with_cleat(drum_at(drum_radius, h), cleat_radius, cleat_height, jnp.pi, 0.0)
+    its cleat at the bottom (out of reach); then, when crossing (K,) is not empty, the quasi-static
+    crossing at the last load: a cleat-free frictionless level and one level per contact position
+    s in crossing (m, module docstring). A Path (`static_path`)."""
+    def surface_at(h, s):
+        phi = jnp.where(jnp.isnan(s), jnp.pi, -s / drum_radius)  # s: arc along the drum's surface
+        return with_cleat(drum_at(drum_radius, h), cleat_radius, cleat_height, phi, 0.0)
 
-    return EQ.static_path(model, params, pressure, EQ.vertical_levels(pressure, loads), surface_at=surface_at)
+    parts = [EQ.vertical_levels(pressure, loads)]
+    if crossing.shape[0]:
+        args = jnp.concatenate([jnp.full(1, jnp.nan), crossing])
+        parts.append(EQ.Levels.make(pressure, rim_force=np.array([0, 0, -1.0, 0, 0, 0]) * loads[-1],
+                                    rim_free=np.array([0, 0, 1.0, 0, 0, 0]), friction_on=0.0, surface_arg=args,
+                                    n=args.shape[0]))
+    return EQ.static_path(model, params, pressure, *parts, surface_at=surface_at)
 
 
 def with_cleat(d: Drum, radius, height, phi_at, t_at):
@@ -94,12 +116,17 @@ class DrumCleat(Experiment):
         "f_band_Hz": Field(list, 1, 0, 10000, [20.0, 200.0], "Hz"),
         "pad_resolution_Hz": Field(float, 1, 1e-4, 0.2, 0.01, "Hz"),
         "method": Field(str, default="static", choices=("static", "transient")),
+        "enveloping_range_mm": Field(float, U.MM, 0, 2000, 300.0, "mm (quasi-static crossing from -range to +range; "
+                                     "0: none; method \"static\" only)"),
+        "enveloping_step_mm": Field(float, U.MM, 2, 200, 10.0, "mm (each level starts from the last: 20 mm "
+                                    "failed to converge on the coarse ring)"),
     }
     traced_names = ()
     quantity_names = ("first_mode_Hz", "k_dv_N_per_m", "first_mode_fit_fn_Hz", "k_dv_fit_N_per_m", "first_mode_fit_fd_Hz",
                       "first_mode_xi", "first_mode_contact_force_Hz", "first_mode_contact_force_fit_fn_Hz",
                       "first_mode_belt_displacement_Hz", "raw_resolution_Hz", "padded_resolution_Hz", "m_b_kg",
-                      "deflection_m", "contact_half_length_on_drum_m", "peak_axle_force_N", "static_axle_force_N")
+                      "deflection_m", "contact_half_length_on_drum_m", "peak_axle_force_N", "static_axle_force_N",
+                      *ENVELOPING_NAMES)
 
     drum_radius: jax.Array
     speed: jax.Array
@@ -113,6 +140,12 @@ class DrumCleat(Experiment):
     pad_resolution: float = eqx.field(static=True)
     n_save: int = eqx.field(static=True)
     method: str = eqx.field(static=True, default="static")  # inflation and loading: "static" or "transient"
+    crossing: tuple = eqx.field(static=True, default=())  # contact positions s (m) of the quasi-static crossing
+
+    @classmethod
+    def produces(cls, table):
+        crossing = table["enveloping_range_mm"] > 0 and table["method"] == "static"
+        return cls.quantity_names if crossing else tuple(n for n in cls.quantity_names if n not in ENVELOPING_NAMES)
 
     @property
     def time_stepped(self) -> bool:
@@ -134,11 +167,17 @@ class DrumCleat(Experiment):
             raise ConfigError(f"drum_cleat.roll_settle_s + record_s = {table['roll_settle_s'] + table['record_s']:g} s: the "
                               f"cleat would come round twice; keep the rolling shorter than one drum turn "
                               f"({2 * math.pi / omega_d:.3g} s) less 1.2 rad")
+        rng, step = table["enveloping_range_mm"], table["enveloping_step_mm"]
+        n_cross = int(round(2 * rng / step)) + 1 if rng > 0 and table["method"] == "static" else 0
+        if n_cross > 401:
+            raise ConfigError(f"drum_cleat.enveloping_step_mm = {step * 1e3:g}: at most 400 steps over the range "
+                              f"(2 x {rng * 1e3:g} mm); raise the step to >= {2 * rng / 400 * 1e3:.3g} mm")
+        crossing = tuple(float(x) for x in np.linspace(-rng, rng, n_cross)) if n_cross else ()
         return cls(proto=proto, drum_radius=f64(r_d), speed=f64(v), cleat_radius=f64(r_c), cleat_height=f64(h_c),
                    roll_settle=f64(table["roll_settle_s"]), lead_time=f64(table["lead_time_s"]),
                    record=float(table["record_s"]), sample_rate=float(fs), f_band=(lo, hi),
                    pad_resolution=float(table["pad_resolution_Hz"]), n_save=int(round(t_imp * fs)) + 1,
-                   method=table["method"])
+                   method=table["method"], crossing=crossing)
 
     def t_impact(self):
         return self.lead_time + CROSS_ALLOWANCE + self.record
@@ -197,13 +236,15 @@ class DrumCleat(Experiment):
         mem0 = {k: 0.0 for k in ("z_top", "phi_imp", "phi_leave", "a", "defl", "t_imp0")}
         if self.method == "static":
             loads = case.load * jnp.arange(1, STATIC_LOADS + 1) / STATIC_LOADS
-            path = _drum_path_jit(model, params, case.pressure, loads, R_d, r_c, h_c)
-            loaded = jax.tree_util.tree_map(lambda a: a[-1], path.ys)
-            mem0["z_top"] = path.road_height[-1]
+            crossing = jnp.asarray(self.crossing, jnp.float64).reshape(-1)
+            path = _drum_path_jit(model, params, case.pressure, loads, R_d, r_c, h_c, crossing)
+            iL = STATIC_LOADS + 1  # the last load level; the crossing's levels follow it
+            loaded = jax.tree_util.tree_map(lambda a: a[iL], path.ys)
+            mem0["z_top"] = path.road_height[iL]
             outs, _, mem = run_plan_vmapped(model, params, lambda c: branches(c)[2:], case, loaded, mem0, proto.ke_tol,
                                             self.n_save)
-            return {"phases": outs, "mem": mem, "static_infos": path.infos, "static_contact": path.contact[-1],
-                    "static_loads": loads}
+            return {"phases": outs, "mem": mem, "static_infos": path.infos, "static_contact": path.contact[iL],
+                    "static_loads": loads, "crossing_z": path.q[iL + 1:, 2], "crossing_contact": path.contact[iL + 1:]}
         y0 = TireState.at_rest(model, len(params.relaxation_times))
         outs, y, mem = run_plan(model, params, branches(case), y0, mem0, proto.ke_tol, self.n_save)
         return {"phases": outs, "mem": mem}
@@ -212,7 +253,13 @@ class DrumCleat(Experiment):
         """(the roll and impact phases, checks, info) after checking how the loaded state was reached."""
         if self.method == "static":
             loads = np.asarray(out["static_loads"])
-            check_static_path("drum_cleat", {"loads": loads, "infos": out["static_infos"]})
+            n = len(loads) + 2
+            infos = out["static_infos"]
+            check_static_path("drum_cleat", {"loads": loads, "infos": jax.tree_util.tree_map(lambda a: a[:n], infos)})
+            EQ.check_static(jax.tree_util.tree_map(lambda a: a[n:], infos), lambda k: (
+                "drum_cleat: quasi-static crossing, cleat-free level" if k == 0 else
+                f"drum_cleat: quasi-static crossing at s = {1e3 * self.crossing[k - 1]:.4g} mm"),
+                hint="try a smaller drum_cleat.enveloping_step_mm, or enveloping_range_mm = 0 (no crossing)")
             fz = float(np.asarray(out["static_contact"])[2])
             require_equilibrium("drum_cleat: loaded on the still drum", fz, load)
             checks, info = static_summary(out["static_infos"])
@@ -259,7 +306,11 @@ class DrumCleat(Experiment):
              "raw_resolution_Hz": sp.raw_resolution_Hz, "padded_resolution_Hz": sp.padded_resolution_Hz,
              "m_b_kg": m_b, "deflection_m": mem["defl"], "contact_half_length_on_drum_m": mem["a"],
              "peak_axle_force_N": float(np.max(f_axle)), "static_axle_force_N": float(np.mean(f_axle[pre]))}
-        checks = checks0 | {
+        env_checks, env_info = {}, {}
+        if self.method == "static" and self.crossing:
+            q_env, env_checks, env_info = self._crossing(out, mem)
+            q |= q_env
+        checks = checks0 | env_checks | {
             "spectrum_peak_at_band_edge": sp.peak_at_band_edge, "fit_rms_relative": sp.fit_rms_relative,
             "fit_vs_peak_rel_diff": sp.rel_diff_f,
             "contact_vs_axle_mode_rel_diff": (sp_c.f_peak_Hz - f1) / f1,
@@ -273,10 +324,37 @@ class DrumCleat(Experiment):
             "cleat_height_m": float(self.cleat_height), "cleat_height_note": "not given by the study: a config choice",
             "t_cleat_touch_s": t_touch, "t_cleat_leave_s": t_leave, "spectrum_from_s": t_leave,
             "sample_rate_Hz": self.sample_rate, "f_band_Hz": list(band),
-            "spectrum": sp.as_dict(), "spectrum_contact_force": sp_c.as_dict()}
+            "spectrum": sp.as_dict(), "spectrum_contact_force": sp_c.as_dict()} | env_info
         sig = {"time_s": ts - t_touch, "axle_force_N": f_axle, "axle_force_x_N": s["tire_on_rim"][:, 0],
                "contact_force_z_N": fc, "belt_disp_z_m": bz, "spin_rad_s": spin}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
+
+
+    def _crossing(self, out, mem):
+        """(quantities, checks, info) of the quasi-static crossing: effective height and slope at each
+        contact position and the tandem cam fitted to them (module docstring)."""
+        z = np.asarray(out["crossing_z"])
+        c = np.asarray(out["crossing_contact"])
+        s = np.asarray(self.crossing)
+        w = z[1:] - z[0]  # the rim's lift under the constant load
+        if max(abs(w[0]), abs(w[-1])) > CROSSING_EDGE_M:
+            raise SimulationError(
+                f"drum_cleat: quasi-static crossing: the cleat still lifts the tire by {1e3 * max(w[0], w[-1]):.3g} mm at "
+                f"s = +-{1e3 * s[-1]:.4g} mm, the crossing's ends: raise drum_cleat.enveloping_range_mm (up to 2000)")
+        fz = c[1:, 2]
+        slope = -(c[1:, 0] - c[0, 0]) / fz
+        r_c, h_c = float(self.cleat_radius), float(self.cleat_height)
+        f = enveloping.fit(s, w, slope, r_c, h_c, a=mem["a"], R0=-mem["z_top"])
+        q = {"ellips_shift_m": f.l_s, "ellips_length_m": f.a_e, "ellips_height_m": f.b_e, "ellips_order": f.c_e,
+             "enveloping_fit_rms_height_m": f.rms_height_m, "enveloping_max_height_m": f.max_height_m}
+        checks = {"enveloping_fit_rms_height_rel": f.rms_height_m / max(f.max_height_m, 1e-12),
+                  "enveloping_fit_rms_slope": f.rms_slope, "enveloping_fit_on_bound": ", ".join(f.on_bound) or "none",
+                  "enveloping_contact_F_z_rel_spread": float(np.ptp(fz) / np.mean(fz))}
+        info = {"enveloping": {"s_m": s.tolist(), "w_m": w.tolist(), "slope": slope.tolist(),
+                               "F_x_N": c[1:, 0].tolist(), "F_z_N": fz.tolist(), "fit": f.as_dict(),
+                               "what": "quasi-static crossing: rim under the constant load, frictionless, cleat "
+                                       "stepped through the patch; w = rim lift, slope = -F_x/F_z"}}
+        return q, checks, info
 
 
 _drum_path_jit = eqx.filter_jit(_drum_path)  # one compiled static program for every drum and cleat

@@ -23,6 +23,8 @@ Causes the checks look for (each found on the default mesh; see the module's tes
     metric is (the fit), the ring's frequency entering zeta = C / (2 m omega), and the single time
     constant tau = C_tot / k_sv of §3 that makes the ring's belt damping grow with frequency;
   * drum fore-aft mode: k_bx (E13's, or the isotropy assumption k_bx = k_bz without E13);
+  * drum peak-to-peak forces: the quasi-static swing the cam gives (k_vt w_max; 2 F_z slope_max)
+    against the shell's and the ring's at speed;
   * lateral release: the reduced lateral model (m_tot on k_l) against the belt's own DOFs;
   * slip step: speed dependence of the shell, the E10 window not yet steady, the linear k_m against
     the curved M_z(alpha), and a first-order lag over sigma = k_f / k_l against a contact patch of
@@ -35,7 +37,8 @@ import numpy as np
 
 from .diagnosis_base import FULL, NONE, PARTIAL, _Context, _p  # noqa: F401  (FULL, PARTIAL: the states)
 from .diagnosis_inplane import (_belt_mode, _drop_bounce_f, _drop_peak, _drop_static, _drop_zeta,
-                                _drum_fore_aft_f, _drum_fore_aft_zeta, _drum_vertical_f, _drum_vertical_zeta)
+                                _drum_fore_aft_f, _drum_fore_aft_zeta, _drum_peak_to_peak, _drum_vertical_f,
+                                _drum_vertical_zeta)
 from .diagnosis_lateral import _lateral_f, _lateral_zeta, _step_force, _step_s63
 from .modes import belt_vertical_mode, fore_aft_modes, lateral_modes, string_step_s63, vertical_modes  # noqa: F401
 from .params import derive
@@ -51,6 +54,8 @@ CHECKS = {
     "drum.vertical_mode_zeta": _drum_vertical_zeta,
     "drum.fore_aft_mode_Hz": _drum_fore_aft_f,
     "drum.fore_aft_mode_zeta": _drum_fore_aft_zeta,
+    "drum.F_z_peak_to_peak_N": lambda cx, c: _drum_peak_to_peak(cx, c, "z"),
+    "drum.F_x_peak_to_peak_N": lambda cx, c: _drum_peak_to_peak(cx, c, "x"),
     "lateral.f_Hz": _lateral_f,
     "lateral.zeta": _lateral_zeta,
 }

@@ -349,3 +349,39 @@ def _drum_fore_aft_zeta(cx, c):
     if state == PARTIAL:
         txt += "; the rest is not established"
     return state, txt
+
+
+def _drum_peak_to_peak(cx, c, axis):
+    """The cleat's force swing against what the cam gives quasi-statically: with the rim locked the
+    ring's springs in series (k_vt) turn E03's effective height w into a rise k_vt w_max, and the
+    normal force tilted by the effective slope into F_x ~ F_z slope. When the quasi-static swing
+    is near the shell's, what differs is the ring's dynamic response to the cam at speed."""
+    res, sig = cx.case("drum_cleat")
+    q = (res or {}).get("quantities", {})
+    env = (res or {}).get("info", {}).get("enveloping")
+    w_max, k_vt = q.get("enveloping_max_height_m"), cx.d.k_vt or cx.d.k_sv
+    if not env or not w_max or not k_vt:
+        return NONE, "E03's case has no quasi-static crossing to compare with (its cam is what the ring rolls on)"
+    rise = k_vt * w_max
+    if axis == "z":
+        peak, static = q.get("peak_axle_force_N"), q.get("static_axle_force_N")
+        qs = rise  # from the static level up; the quasi-static response does not swing below it
+        shell_rise = None if peak is None or static is None else peak - static
+        txt = (f"quasi-statically the cam lifts the road by w_max = {_n(w_max * 1e3, 'mm')} (E03's crossing), a rise "
+               f"k_vt w_max = {_n(qs, 'N')} on the rim-locked springs ({_p(qs / c.shell - 1)} against the shell's "
+               f"peak to peak)")
+        if shell_rise:
+            txt += (f"; the shell's peak rises {_n(shell_rise, 'N')} above its rolling level (x {shell_rise / qs:.3g} the "
+                    f"quasi-static rise)")
+    else:
+        slope = np.abs(np.asarray(env["slope"], float))
+        fz = cx.load_N + rise
+        qs = 2 * fz * float(np.max(slope))  # the tilt's swing, forward then back
+        txt = (f"quasi-statically the normal force tilted by E03's effective slope (up to {np.max(slope):.3g}) swings F_x "
+               f"by 2 F_z slope_max = {_n(qs, 'N')} ({_p(qs / c.shell - 1)} against the shell's peak to peak)")
+    txt += (f"; the ring at speed swings x {c.ring / qs:.3g} that, the shell x {c.shell / qs:.3g}")
+    if _within(qs, c.shell, c.tolerance):
+        mode = "belt's vertical mode" if axis == "z" else "fore-aft and wind-up modes"
+        return PARTIAL, (txt + f": the cam carries the shell's quasi-static response; the ring's {mode}, excited by "
+                         "the cam at speed, overshoot where the shell's do not. Why is not established")
+    return NONE, txt

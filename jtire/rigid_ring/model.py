@@ -27,9 +27,11 @@ Out-of-plane, "reduced" (§5 fallback, MF 6.1's own transient): no belt lateral 
 ring's k_by, k_bgamma (the carcass compliance would count twice).
 M_z = M_z,E10(alpha') at alpha' = -F_y_SAE / k_f: the condition's steady E10 curve (odd part,
 piecewise linear; k_m alpha', the pneumatic trail k_m/k_f, without one), on the rim (no belt yaw DOF).
-Omitted (§4): rotating-sidewall Omega terms, Q_BVX/Q_BVT stiffening, rolling resistance, cleat
-enveloping (a point contact follows the road profile: waveforms are not comparable with the shell
-model's, frequencies and decay are).
+Cleat: with a tandem cam (`Drive.ellips`, l_s > 0) the contact follows the effective road of
+`jtire.enveloping` (height w, slope dw/dx, dw/dt = V dw/ds; MF-Swift's enveloping); without one a
+point contact follows the cleat's own profile (frequencies and decay comparable, waveforms not).
+Omitted (§4): rotating-sidewall Omega terms, Q_BVX/Q_BVT stiffening, rolling resistance, the effective
+rolling radius's variation over the cleat.
 
 Solver: Tsit5 (explicit, adaptive PID). The fastest dynamics are the belt's vertical and fore-aft
 modes (~60-70 Hz) and the slip lag k_k / (V m_b) (~1e3 1/s at 50 km/h): not stiff enough for an
@@ -42,6 +44,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from .. import enveloping
 from .params import RigidRingParams
 
 N_Q = 10
@@ -64,7 +67,8 @@ class Drive(eqx.Module):
     forces on the rim's coordinates (N, N m), constant. V: road speed (m/s). alpha_iso: slip
     angle after the step (rad, ISO), reached by a half-cosine ramp from t_alpha over t_ramp.
     gravity (m/s^2, >= 0, on every mass). z_road: road height (m). Cleat: a round bump of radius
-    r_cleat and height h_cleat (0: none) whose crest passes the contact point at s = V t = s_cleat."""
+    r_cleat and height h_cleat (0: none) whose crest passes the contact point at s = V t = s_cleat;
+    ellips (4,): the tandem cam (l_s, a_e, b_e, c_e) of `jtire.enveloping` (l_s = 0: point contact)."""
 
     free: jnp.ndarray
     rim_force: jnp.ndarray
@@ -77,10 +81,11 @@ class Drive(eqx.Module):
     r_cleat: jnp.ndarray
     h_cleat: jnp.ndarray
     s_cleat: jnp.ndarray
+    ellips: jnp.ndarray
 
     @classmethod
     def make(cls, free=(), rim_force=None, V=0.0, alpha_iso=0.0, t_alpha=0.0, t_ramp=0.005, gravity=0.0,
-             z_road=0.0, r_cleat=0.1, h_cleat=0.0, s_cleat=0.0):
+             z_road=0.0, r_cleat=0.1, h_cleat=0.0, s_cleat=0.0, ellips=None):
         """free: names of the rim coordinates that move (e.g. ("z_a",)); the belt always moves."""
         m = jnp.zeros(N_Q).at[jnp.asarray(BELT)].set(1.0)
         for n in free:
@@ -88,7 +93,8 @@ class Drive(eqx.Module):
         rf = jnp.zeros(N_Q) if rim_force is None else _f64(rim_force)
         return cls(free=_f64(m), rim_force=rf, V=_f64(V), alpha_iso=_f64(alpha_iso), t_alpha=_f64(t_alpha),
                    t_ramp=_f64(t_ramp), gravity=_f64(gravity), z_road=_f64(z_road), r_cleat=_f64(r_cleat),
-                   h_cleat=_f64(h_cleat), s_cleat=_f64(s_cleat))
+                   h_cleat=_f64(h_cleat), s_cleat=_f64(s_cleat),
+                   ellips=jnp.zeros(4) if ellips is None else _f64(ellips))
 
 
 def road(drive: Drive, t):
@@ -100,7 +106,13 @@ def road(drive: Drive, t):
     root = jnp.sqrt(jnp.clip(r**2 - s**2, 1e-12))
     z = jnp.where(inside, root - (r - h), 0.0)
     slope = jnp.where(inside, -s / root, 0.0)
-    return drive.z_road + z, slope, slope * drive.V
+    l_s, a_e, b_e, c_e = drive.ellips
+    cam = l_s > 0
+    one = lambda v, fallback: jnp.where(cam, v, fallback)  # noqa: E731  (placeholders keep the cam finite)
+    w, w_slope, w_rate = enveloping.effective_with_rate(s, one(l_s, 1.0), one(a_e, 1.0), one(b_e, 1.0), one(c_e, 2.0),
+                                                       r, jnp.where(cam, h, 0.0))
+    return (drive.z_road + jnp.where(cam, w, z), jnp.where(cam, w_slope, slope),
+            jnp.where(cam, w_rate, slope) * drive.V)
 
 
 def slip_angle(drive: Drive, t):
@@ -205,18 +217,20 @@ def _outputs(model, ts, ys, drive):
     return jax.vmap(lambda t, y: model.forces(t, y, drive))(ts, ys)
 
 
-def simulate(model: RigidRing, drive: Drive, y0, t1, ts, rtol=1e-7, atol=1e-9, max_steps=200_000, dt0=1e-5):
-    """Integrate from t = 0 to t1, saving at ts (N,). Returns ys (N, 22). Jit-compiled per
-    (lateral, shapes); differentiable in model.params and drive."""
-    return _simulate(model, drive, _f64(y0), _f64(t1), _f64(ts), rtol, atol, max_steps, dt0)
+def simulate(model: RigidRing, drive: Drive, y0, t1, ts, rtol=1e-7, atol=1e-9, max_steps=200_000, dt0=1e-5,
+             dtmax=None):
+    """Integrate from t = 0 to t1, saving at ts (N,). Returns ys (N, 22). dtmax: the largest step (s;
+    an input that starts later, like a cleat, is not stepped over from a quiet start). Jit-compiled
+    per (lateral, shapes); differentiable in model.params and drive."""
+    return _simulate(model, drive, _f64(y0), _f64(t1), _f64(ts), rtol, atol, max_steps, dt0, dtmax)
 
 
 @eqx.filter_jit
-def _simulate(model, drive, y0, t1, ts, rtol, atol, max_steps, dt0):
+def _simulate(model, drive, y0, t1, ts, rtol, atol, max_steps, dt0, dtmax=None):
     term = diffrax.ODETerm(lambda t, y, args: model.vector_field(t, y, args))
     sol = diffrax.diffeqsolve(term, diffrax.Tsit5(), _f64(0.0), t1, dt0, y0, args=drive,
                               saveat=diffrax.SaveAt(ts=ts),
-                              stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
+                              stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol, dtmax=dtmax),
                               max_steps=max_steps)
     return sol.ys
 

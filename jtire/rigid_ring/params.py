@@ -112,6 +112,7 @@ class Derived:
     stiffness_source: str | None = None  # which stiffness the dynamic springs use, and why
     damping_source: str | None = None  # how C_bz, C_vr were identified (or the fallback, and why)
     mz_curve: tuple | None = None  # (alpha SAE rad (n,), M_z SAE N m (n,)): E10's steady curve, odd, ascending
+    ellips: tuple | None = None  # E03's tandem cam (l_s, a_e, b_e, c_e) (m, m, m, -); None: point contact
 
     def residual_deflection(self, force: float) -> float:
         """The residual spring's deflection (m) under a contact force (N): the root of
@@ -255,7 +256,13 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
         C_bz_B=times(tau, k_bz_b), C_vr_B=times(tau, k_vr_b), k_bx=k_bx, C_bx=c_bx, sigma=sigma,
         k_cy=k_cy, sigma_c=sigma_c, C_cy=c_cy, k_cy_source=src, k_l_ring=k_l_ring, k_l_ring_rel_error=k_l_err,
         C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src,
-        k_vt=k_t, **res, damping_source=split[2], mz_curve=mz_curve(row.curves))
+        k_vt=k_t, **res, damping_source=split[2], mz_curve=mz_curve(row.curves), ellips=_ellips(row))
+
+
+def _ellips(row) -> tuple | None:
+    """E03's tandem cam from the row, when all four parameters are there."""
+    v = tuple(row.get(k) for k in ("ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order"))
+    return v if all(_ok(x) and x > 0 for x in v) else None
 
 
 def _mz_table(d: Derived) -> dict:

@@ -13,6 +13,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
+from .. import enveloping
 from .. import signals as sig
 from .. import spectra
 from ..errors import ConfigError, SimulationError
@@ -124,23 +125,27 @@ def drop_test(d: Derived, drop_height=0.02, duration=0.4, gravity=0.0, n_save=40
 
 def drum_cleat(d: Derived, speed=50 / 3.6, cleat_diameter=0.2, cleat_height=0.02, lead_s=0.01, record_s=0.3,
                sample_rate=4000.0, f_band=(20.0, 200.0)):
-    """Rim x and z locked, spin free, rolling at `speed` over a round cleat (point contact on its
-    profile: no enveloping, so the force waveform is not comparable; frequencies and decay are).
-    Reduces the spindle F_z and F_x after the cleat (jtire.spectra.first_mode: padded-spectrum
-    peak and a damped-mode fit)."""
+    """Rim x and z locked, spin free, rolling at `speed` over a round cleat: through E03's tandem cam
+    when the condition has one (d.ellips, the effective road of `jtire.enveloping`: the force
+    waveform and its peak-to-peak are comparable), else a point contact on the cleat's profile
+    (frequencies and decay comparable, the waveform not). The cleat reaches the tire `lead_s` after
+    the start. Reduces the spindle F_z and F_x after the cleat (jtire.spectra.first_mode:
+    padded-spectrum peak and a damped-mode fit)."""
     m = _model(d, "reduced", "inplane", "drum-cleat")
     fz = d.load_N
     eq = vertical_equilibrium(d, fz)
     r_c = cleat_diameter / 2
-    s_c = speed * lead_s
     half = math.sqrt(max(r_c**2 - (r_c - cleat_height) ** 2, 0.0))
-    t_free = (s_c + half) / speed
+    reach = half if d.ellips is None else enveloping.reach(d.ellips[0], d.ellips[1], r_c, cleat_height)
+    s_c = speed * lead_s + reach
+    t_free = (s_c + reach) / speed
     t1 = t_free + record_s
-    drive = Drive.make(free=("theta_a",), V=speed, r_cleat=r_c, h_cleat=cleat_height, s_cleat=s_c)
+    drive = Drive.make(free=("theta_a",), V=speed, r_cleat=r_c, h_cleat=cleat_height, s_cleat=s_c, ellips=d.ellips)
     omega = speed / d.r_e
     y0 = _state(z_a=eq["z_a"], z_b=eq["z_b"], v_theta_a=omega, v_theta_b=omega)
     ts = np.arange(0.0, t1, 1.0 / sample_rate)
-    ys = _check(simulate(m, drive, y0, ts[-1], ts), "drum-cleat")
+    # steps no longer than a sample: from the quiet start the controller would grow past the cleat
+    ys = _check(simulate(m, drive, y0, ts[-1], ts, dtmax=1.0 / sample_rate), "drum-cleat")
     out = _np(m.outputs(jnp.asarray(ts), jnp.asarray(ys), drive))
     fz_sp, fx_sp = out["tire_on_rim_z"], out["tire_on_rim_x"]
     sz = spectra.first_mode(ts, fz_sp, f_band=f_band, t_start=t_free)
@@ -161,7 +166,15 @@ def drum_cleat(d: Derived, speed=50 / 3.6, cleat_diameter=0.2, cleat_height=0.02
                "contact_force_z_N": out["F_z"]}
     return ScenarioResult("drum_cleat", q, implied, signals,
                           {"speed_m_s": speed, "cleat_diameter_m": cleat_diameter, "cleat_height_m": cleat_height,
-                           "enveloping": "none (point contact follows the cleat profile)", "t_free_s": t_free})
+                           "enveloping": "none (point contact follows the cleat profile)" if d.ellips is None else
+                           "tandem cam (l_s, a_e, b_e, c_e) = ({:.4g}, {:.4g}, {:.4g}, {:.4g}) from E03".format(*d.ellips),
+                           "t_free_s": t_free, "t_touch_s": _first_rise(ts, out["z_road"])})
+
+
+def _first_rise(t, z, eps=1e-7):
+    """Time (s) the road under the contact first rises (the tire meets the cleat); t[0] if never."""
+    up = np.asarray(z) - z[0] > eps
+    return float(t[int(np.argmax(up))]) if up.any() else float(t[0])
 
 
 def lateral_static(d: Derived, force: float, lateral: str) -> dict:

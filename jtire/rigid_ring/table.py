@@ -97,7 +97,10 @@ QUANTITIES = (
 BY_KEY = {q.key: q for q in QUANTITIES}
 # accepted but not tabulated: extra E01/E03/E04 outputs that tests and reports may use
 EXTRA_KEYS = ("deflection_m", "first_mode_fit_fn_Hz", "first_mode_xi", "k_dv_fit_N_per_m", "xi_in_contact_fit",
-              "omega_n_in_contact_fit_rad_per_s")
+              "omega_n_in_contact_fit_rad_per_s",
+              # E03's tandem cam (jtire.enveloping), fitted to its quasi-static crossing
+              "ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order", "enveloping_fit_rms_height_m",
+              "enveloping_max_height_m")
 CURVE_KEYS = ("slip_angle_deg", "lateral_force_N", "M_z_SAE_Nm", "F_z_N", "F_y_SAE_N", "F_x_N")
 CURVE_REQUIRED = ("slip_angle_deg", "lateral_force_N")
 SLIP_CURVE_KEYS = ("slip", "force_x_N", "force_z_N")

@@ -195,6 +195,16 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
         put("Q_RA2", c[1], "see Q_RA1")
     if d0.w is not None and d0.rho is not None:
         put("Q_RB1", (d0.w / 2 / t.width_m) / (d0.rho / R0) ** (1 / 3), f"b/W = Q_RB1 (rho/R0)^(1/3), E01 at {at}")
+    # enveloping: E03's tandem cam at the nominal condition, in jtire's scaling (jtire.enveloping)
+    if d0.ellips is not None:
+        l_s, a_e, b_e, c_e = d0.ellips
+        src = (f"E03's quasi-static crossing of its {r0.get('enveloping_max_height_m') or 0:.3g} m-high effective bump "
+               f"at {at} (fit rms {1e3 * (r0.get('enveloping_fit_rms_height_m') or math.nan):.2g} mm)")
+        if d0.a is not None:
+            put("ELLIPS_SHIFT", l_s / (2 * d0.a), f"l_s / 2a: the cams' distance over the contact length (E01's a); {src}")
+        put("ELLIPS_LENGTH", a_e / R0, "a_e / R0: the cam's half length; jtire's scaling (MF-Swift's own may differ)")
+        put("ELLIPS_HEIGHT", b_e / R0, "b_e / R0: the cam's half height; jtire's scaling")
+        put("ELLIPS_ORDER", c_e, "c_e: the cam's super-ellipse exponent")
     # ranges
     put("PRESMIN", min(r.pressure_Pa for r in char.rows), "lowest characterized pressure")
     put("PRESMAX", max(r.pressure_Pa for r in char.rows), "highest characterized pressure")
