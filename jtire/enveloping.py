@@ -17,11 +17,12 @@ tandem must reproduce.
 """
 
 import dataclasses
-import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+
+from .physics.drum import cleat_half_chord
 
 N_CHORD = 201  # points across the cleat's chord where each cam's contact is looked for
 NAMES = ("l_s", "a_e", "b_e", "c_e")
@@ -60,7 +61,7 @@ def effective_with_rate(s, l_s, a_e, b_e, c_e, r, h):
 
 def reach(l_s, a_e, r, h):
     """Distance (m) from the cleat's crest beyond which the tandem does not touch it."""
-    return math.sqrt(max(r * r - (r - h) ** 2, 0.0)) + 0.5 * l_s + a_e
+    return cleat_half_chord(r, h) + 0.5 * l_s + a_e
 
 
 _effective_many = jax.jit(jax.vmap(effective, in_axes=(0, None, None, None, None, None, None)))

@@ -337,3 +337,18 @@ def user_dir(tmp_path, monkeypatch):
     (tmp_path / "configs").symlink_to(REPO / "configs", target_is_directory=True)
     monkeypatch.chdir(tmp_path)
     return tmp_path
+
+
+@pytest.fixture(scope="module")
+def char():
+    """The synthetic characterization (study magnitudes, jtire.rigid_ring.synthetic): no simulation.
+    Several rigid-ring test modules define their own."""
+    from jtire.rigid_ring import synthetic
+
+    return synthetic.characterization()
+
+
+@pytest.fixture(scope="module")
+def rated(char):
+    """The rated row of `char`."""
+    return char.rated_row()

@@ -118,8 +118,7 @@ class DrumCleat(Experiment):
         "method": Field(str, default="static", choices=("static", "transient")),
         "enveloping_range_mm": Field(float, U.MM, 0, 2000, 300.0, "mm (quasi-static crossing from -range to +range; "
                                      "0: none; method \"static\" only)"),
-        "enveloping_step_mm": Field(float, U.MM, 2, 200, 10.0, "mm (each level starts from the last: 20 mm "
-                                    "failed to converge on the coarse ring)"),
+        "enveloping_step_mm": Field(float, U.MM, 2, 200, 10.0, "mm"),
     }
     traced_names = ()
     quantity_names = ("first_mode_Hz", "k_dv_N_per_m", "first_mode_fit_fn_Hz", "k_dv_fit_N_per_m", "first_mode_fit_fd_Hz",
@@ -142,10 +141,15 @@ class DrumCleat(Experiment):
     method: str = eqx.field(static=True, default="static")  # inflation and loading: "static" or "transient"
     crossing: tuple = eqx.field(static=True, default=())  # contact positions s (m) of the quasi-static crossing
 
+    @staticmethod
+    def _crosses(table) -> bool:
+        """The table asks for the quasi-static crossing (it needs the static loading)."""
+        return table["enveloping_range_mm"] > 0 and table["method"] == "static"
+
     @classmethod
     def produces(cls, table):
-        crossing = table["enveloping_range_mm"] > 0 and table["method"] == "static"
-        return cls.quantity_names if crossing else tuple(n for n in cls.quantity_names if n not in ENVELOPING_NAMES)
+        return cls.quantity_names if cls._crosses(table) else tuple(n for n in cls.quantity_names
+                                                                   if n not in ENVELOPING_NAMES)
 
     @property
     def time_stepped(self) -> bool:
@@ -168,7 +172,7 @@ class DrumCleat(Experiment):
                               f"cleat would come round twice; keep the rolling shorter than one drum turn "
                               f"({2 * math.pi / omega_d:.3g} s) less 1.2 rad")
         rng, step = table["enveloping_range_mm"], table["enveloping_step_mm"]
-        n_cross = int(round(2 * rng / step)) + 1 if rng > 0 and table["method"] == "static" else 0
+        n_cross = int(round(2 * rng / step)) + 1 if cls._crosses(table) else 0
         if n_cross > 401:
             raise ConfigError(f"drum_cleat.enveloping_step_mm = {step * 1e3:g}: at most 400 steps over the range "
                               f"(2 x {rng * 1e3:g} mm); raise the step to >= {2 * rng / 400 * 1e3:.3g} mm")
@@ -307,7 +311,7 @@ class DrumCleat(Experiment):
              "m_b_kg": m_b, "deflection_m": mem["defl"], "contact_half_length_on_drum_m": mem["a"],
              "peak_axle_force_N": float(np.max(f_axle)), "static_axle_force_N": float(np.mean(f_axle[pre]))}
         env_checks, env_info = {}, {}
-        if self.method == "static" and self.crossing:
+        if self.crossing:  # only ever set with the static method
             q_env, env_checks, env_info = self._crossing(out, mem)
             q |= q_env
         checks = checks0 | env_checks | {

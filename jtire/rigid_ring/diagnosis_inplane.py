@@ -356,7 +356,7 @@ def _drum_peak_to_peak(cx, c, axis):
     ring's springs in series (k_vt) turn E03's effective height w into a rise k_vt w_max, and the
     normal force tilted by the effective slope into F_x ~ F_z slope. When the quasi-static swing
     is near the shell's, what differs is the ring's dynamic response to the cam at speed."""
-    res, sig = cx.case("drum_cleat")
+    res, _ = cx.case("drum_cleat")
     q = (res or {}).get("quantities", {})
     env = (res or {}).get("info", {}).get("enveloping")
     w_max, k_vt = q.get("enveloping_max_height_m"), cx.d.k_vt or cx.d.k_sv
@@ -381,7 +381,8 @@ def _drum_peak_to_peak(cx, c, axis):
                f"by 2 F_z slope_max = {_n(qs, 'N')} ({_p(qs / c.shell - 1)} against the shell's peak to peak)")
     txt += (f"; the ring at speed swings x {c.ring / qs:.3g} that, the shell x {c.shell / qs:.3g}")
     if _within(qs, c.shell, c.tolerance):
-        mode = "belt's vertical mode" if axis == "z" else "fore-aft and wind-up modes"
-        return PARTIAL, (txt + f": the cam carries the shell's quasi-static response; the ring's {mode}, excited by "
-                         "the cam at speed, overshoot where the shell's do not. Why is not established")
+        mode = "vertical belt mode, excited by the cam at speed, overshoots" if axis == "z" else \
+            "fore-aft and wind-up modes, excited by the cam at speed, overshoot"
+        return PARTIAL, (txt + f": the cam carries the shell's quasi-static response; the ring's {mode} where the "
+                         "shell's do not. Why is not established")
     return NONE, txt

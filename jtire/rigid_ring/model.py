@@ -27,7 +27,7 @@ Out-of-plane, "reduced" (§5 fallback, MF 6.1's own transient): no belt lateral 
 ring's k_by, k_bgamma (the carcass compliance would count twice).
 M_z = M_z,E10(alpha') at alpha' = -F_y_SAE / k_f: the condition's steady E10 curve (odd part,
 piecewise linear; k_m alpha', the pneumatic trail k_m/k_f, without one), on the rim (no belt yaw DOF).
-Cleat: with a tandem cam (`Drive.ellips`, l_s > 0) the contact follows the effective road of
+Cleat: with a tandem cam (`Drive.ellips`) the contact follows the effective road of
 `jtire.enveloping` (height w, slope dw/dx, dw/dt = V dw/ds; MF-Swift's enveloping); without one a
 point contact follows the cleat's own profile (frequencies and decay comparable, waveforms not).
 Omitted (§4): rotating-sidewall Omega terms, Q_BVX/Q_BVT stiffening, rolling resistance, the effective
@@ -68,7 +68,8 @@ class Drive(eqx.Module):
     angle after the step (rad, ISO), reached by a half-cosine ramp from t_alpha over t_ramp.
     gravity (m/s^2, >= 0, on every mass). z_road: road height (m). Cleat: a round bump of radius
     r_cleat and height h_cleat (0: none) whose crest passes the contact point at s = V t = s_cleat;
-    ellips (4,): the tandem cam (l_s, a_e, b_e, c_e) of `jtire.enveloping` (l_s = 0: point contact)."""
+    ellips (4,): the tandem cam (l_s, a_e, b_e, c_e) of `jtire.enveloping`, or None: point contact
+    (a different program, so the scenarios without a cam never evaluate one)."""
 
     free: jnp.ndarray
     rim_force: jnp.ndarray
@@ -81,7 +82,7 @@ class Drive(eqx.Module):
     r_cleat: jnp.ndarray
     h_cleat: jnp.ndarray
     s_cleat: jnp.ndarray
-    ellips: jnp.ndarray
+    ellips: jnp.ndarray | None
 
     @classmethod
     def make(cls, free=(), rim_force=None, V=0.0, alpha_iso=0.0, t_alpha=0.0, t_ramp=0.005, gravity=0.0,
@@ -94,25 +95,22 @@ class Drive(eqx.Module):
         return cls(free=_f64(m), rim_force=rf, V=_f64(V), alpha_iso=_f64(alpha_iso), t_alpha=_f64(t_alpha),
                    t_ramp=_f64(t_ramp), gravity=_f64(gravity), z_road=_f64(z_road), r_cleat=_f64(r_cleat),
                    h_cleat=_f64(h_cleat), s_cleat=_f64(s_cleat),
-                   ellips=jnp.zeros(4) if ellips is None else _f64(ellips))
+                   ellips=None if ellips is None else _f64(ellips))
 
 
 def road(drive: Drive, t):
     """(height z_road (m), slope dz/ds, dz/dt) under the contact point at time t."""
     s = drive.V * t - drive.s_cleat
     r, h = drive.r_cleat, drive.h_cleat
+    if drive.ellips is not None:  # decided when tracing: a scenario without a cam never evaluates one
+        w, w_slope, w_rate = enveloping.effective_with_rate(s, *drive.ellips, r, h)
+        return drive.z_road + w, w_slope, w_rate * drive.V
     half = jnp.sqrt(jnp.clip(r**2 - (r - h) ** 2, 0.0))  # half chord of the cleat at the road
     inside = (jnp.abs(s) < half) & (h > 0)
     root = jnp.sqrt(jnp.clip(r**2 - s**2, 1e-12))
     z = jnp.where(inside, root - (r - h), 0.0)
     slope = jnp.where(inside, -s / root, 0.0)
-    l_s, a_e, b_e, c_e = drive.ellips
-    cam = l_s > 0
-    one = lambda v, fallback: jnp.where(cam, v, fallback)  # noqa: E731  (placeholders keep the cam finite)
-    w, w_slope, w_rate = enveloping.effective_with_rate(s, one(l_s, 1.0), one(a_e, 1.0), one(b_e, 1.0), one(c_e, 2.0),
-                                                       r, jnp.where(cam, h, 0.0))
-    return (drive.z_road + jnp.where(cam, w, z), jnp.where(cam, w_slope, slope),
-            jnp.where(cam, w_rate, slope) * drive.V)
+    return drive.z_road + z, slope, slope * drive.V
 
 
 def slip_angle(drive: Drive, t):

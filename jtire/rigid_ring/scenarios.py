@@ -17,6 +17,7 @@ from .. import enveloping
 from .. import signals as sig
 from .. import spectra
 from ..errors import ConfigError, SimulationError
+from ..physics.drum import cleat_half_chord
 from .model import IDX, N_STATE, Drive, RigidRing, linearize, modes, simulate
 from .params import Derived, RigidRingParams
 
@@ -135,8 +136,8 @@ def drum_cleat(d: Derived, speed=50 / 3.6, cleat_diameter=0.2, cleat_height=0.02
     fz = d.load_N
     eq = vertical_equilibrium(d, fz)
     r_c = cleat_diameter / 2
-    half = math.sqrt(max(r_c**2 - (r_c - cleat_height) ** 2, 0.0))
-    reach = half if d.ellips is None else enveloping.reach(d.ellips[0], d.ellips[1], r_c, cleat_height)
+    reach = cleat_half_chord(r_c, cleat_height) if d.ellips is None else enveloping.reach(d.ellips[0], d.ellips[1], r_c,
+                                                                                           cleat_height)
     s_c = speed * lead_s + reach
     t_free = (s_c + reach) / speed
     t1 = t_free + record_s
@@ -166,7 +167,8 @@ def drum_cleat(d: Derived, speed=50 / 3.6, cleat_diameter=0.2, cleat_height=0.02
                "contact_force_z_N": out["F_z"]}
     return ScenarioResult("drum_cleat", q, implied, signals,
                           {"speed_m_s": speed, "cleat_diameter_m": cleat_diameter, "cleat_height_m": cleat_height,
-                           "enveloping": "none (point contact follows the cleat profile)" if d.ellips is None else
+                           "ellips": d.ellips, "enveloping": "none (point contact follows the cleat profile)"
+                           if d.ellips is None else
                            "tandem cam (l_s, a_e, b_e, c_e) = ({:.4g}, {:.4g}, {:.4g}, {:.4g}) from E03".format(*d.ellips),
                            "t_free_s": t_free, "t_touch_s": _first_rise(ts, out["z_road"])})
 

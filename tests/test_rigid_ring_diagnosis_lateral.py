@@ -1,0 +1,109 @@
+"""Causes of the rigid ring's out-of-plane disagreements with the shell model: the lateral release
+and the slip-angle step (jtire.rigid_ring.diagnosis_lateral), on the synthetic characterization as in
+test_rigid_ring_diagnosis.py."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from jtire.rigid_ring import diagnosis as dg
+from jtire.rigid_ring.params import derive
+from jtire.rigid_ring.table import Characterization
+
+from .diagnosis_cases import explain, with_row, write_case
+
+
+# ------------------------------------------------------------------ lateral release
+
+
+def test_lateral_frequency_reduced_model_vs_belt_dofs(char, rated):
+    # the default mesh's camber stiffness and k_l (4625 kg, 120 psi): the belt's DOFs then matter
+    char, rated = with_row(char, rated, k_bgamma_Nm_per_rad=5.2e5, k_l_N_per_m=7.0e5)
+    d = derive(rated, char.tire)
+    f_red = dg.lateral_modes(d, "reduced")[0][0]
+    f_ring = dg.lateral_modes(d, "ring")[0][0]
+    assert abs(f_ring / f_red - 1) > 0.05  # the two models differ with the study's magnitudes
+    x = explain(char, rated, {"lateral.f_Hz": f_ring}, {"lateral.f_Hz": f_red})["lateral.f_Hz"]
+    assert x.state == dg.FULL and "ring variant" in x.text
+    x = explain(char, rated, {"lateral.f_Hz": 2 * f_red}, {"lateral.f_Hz": f_red})["lateral.f_Hz"]
+    assert x.state == dg.NONE
+
+
+# ------------------------------------------------------------------ slip-angle step
+
+
+def _step_metrics(d, alpha, fy5, fy15, mz5=None, mz15=None):
+    return {"step_5.F_y_steady_N": -fy5, "step_15.F_y_steady_N": -fy15,
+            "step_5.M_z_steady_Nm": mz5 if mz5 is not None else d.k_m * math.sin(alpha),
+            "step_15.M_z_steady_Nm": mz15 if mz15 is not None else d.k_m * math.sin(alpha)}
+
+
+def test_steady_F_y_speed_dependence(char, rated):
+    d = derive(rated, char.tire)
+    a = math.radians(2.0)
+    lin = d.k_f * math.sin(a)
+    curve = abs(float(np.interp(2.0, rated.curves.slip_angle_deg, rated.curves.wheel_lateral_force()[0])))
+    assert lin == pytest.approx(curve, rel=0.03)  # the synthetic curve is near-linear at 2 deg
+    ring = _step_metrics(d, a, lin, lin)
+    x = explain(char, rated, _step_metrics(d, a, curve, 0.93 * curve), ring)["step_15.F_y_steady_N"]
+    assert x.state == dg.FULL and "speed dependence" in x.text
+    # the same shortfall at both speeds: neither speed nor the curve explains it
+    x = explain(char, rated, _step_metrics(d, a, 0.93 * curve, 0.93 * curve), ring)["step_15.F_y_steady_N"]
+    assert x.state == dg.NONE
+
+
+def test_steady_F_y_from_an_unsettled_E10_window(tmp_path, char, rated):
+    d = derive(rated, char.tire)
+    a = math.radians(2.0)
+    lin = d.k_f * math.sin(a)
+    speed, window_s = 6.7, 0.05
+    short = 0.07  # E10 measured 7 % below steady: the drift a lag over sigma shows over the window
+    drift = short * speed * window_s / d.sigma
+    write_case(tmp_path, "cornering", rated, {"quantities": {"speed_m_per_s": speed}, "info": {"measure_s": window_s}},
+                {"slip_angle_deg": [0.0, 1.0, 2.0, 3.0], "F_y_drift_rel": [0.0, drift, drift, drift]})
+    ring = _step_metrics(d, a, lin, lin)
+    x = explain(char, rated, _step_metrics(d, a, lin * (1 + short), lin * (1 + short)), ring,
+                 char_dir=tmp_path)["step_5.F_y_steady_N"]
+    assert x.state == dg.FULL and "E10's force still grew" in x.text and "+7.0 % short" in x.text
+    x = explain(char, rated, _step_metrics(d, a, lin * (1 + short), lin * (1 + short)), ring)["step_5.F_y_steady_N"]
+    assert x.state == dg.NONE  # without the E10 record the shortfall is not established
+
+
+def test_steady_M_z_linear_k_m_vs_curved_M_z(char, rated):
+    d = derive(rated, char.tire)
+    a = math.radians(2.0)
+    # a strongly curved aligning moment: M_z = M0 tanh(alpha / 2 deg), k_m its slope over 0-3 deg
+    deg = np.array([0.0, 1.0, 2.0, 3.0, 4.0, 6.0, 8.0, 10.0])
+    mz = 400.0 * np.tanh(deg / 2.0)
+    k_m = float(np.polyfit(np.radians(deg[:4]), mz[:4], 1)[0])
+    cv = dataclasses.replace(rated.curves, slip_angle_deg=deg, lateral_force_N=np.interp(deg, rated.curves.slip_angle_deg,
+                                                                                          rated.curves.lateral_force_N),
+                             M_z_SAE_Nm=mz, F_z_N=np.full(deg.shape, rated.load_N), F_y_SAE_N=None)
+    row = dataclasses.replace(rated, q=rated.q | {"k_m_Nm_per_rad": k_m}, curves=cv)
+    ch = Characterization(char.tire, tuple(row if r is rated else r for r in char.rows))
+    lin = d.k_f * math.sin(a)
+    ring = _step_metrics(d, a, lin, lin, k_m * math.sin(a), k_m * math.sin(a))
+    m_curve = 400.0 * math.tanh(1.0)
+    assert abs(k_m * math.sin(a) / m_curve - 1) > 0.1
+    x = explain(ch, row, _step_metrics(d, a, lin, lin, m_curve, m_curve), ring)["step_5.M_z_steady_Nm"]
+    assert x.state == dg.FULL and "curved M_z(alpha)" in x.text
+    x = explain(ch, row, _step_metrics(d, a, lin, lin, 1.5 * m_curve, 1.5 * m_curve), ring)["step_5.M_z_steady_Nm"]
+    assert x.state == dg.NONE
+
+
+def test_s63_first_order_lag_vs_contact_length(char, rated):
+    d = derive(rated, char.tire)
+    s_str = float(dg.string_step_s63(d.sigma, d.a))
+    ring = {"step_5.s63_m": d.sigma, "step_15.s63_m": d.sigma}
+    x = explain(char, rated, {"step_5.s63_m": s_str, "step_15.s63_m": s_str}, ring)["step_5.s63_m"]
+    assert x.state == dg.FULL and "stretched string" in x.text
+    x = explain(char, rated, {"step_5.s63_m": 0.4 * d.sigma, "step_15.s63_m": 0.8 * d.sigma}, ring)
+    assert x["step_5.s63_m"].state == dg.NONE and "changes -50.0 % from 15 to 5 m/s" in x["step_5.s63_m"].text
+    # the shell's overshoot, read from its signals, is reported
+    s = np.linspace(-0.1, 8 * d.sigma, 2001)
+    fy = np.where(s > 0, 1 - np.exp(-s / (0.4 * d.sigma)) * np.cos(s / (0.3 * d.sigma)), 0.0) * 9000.0
+    x = explain(char, rated, {"step_5.s63_m": 0.4 * d.sigma}, {"step_5.s63_m": d.sigma},
+                 shell_signals={"step_5": (s, fy)})["step_5.s63_m"]
+    assert "overshoots by" in x.text
