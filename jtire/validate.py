@@ -75,7 +75,10 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
             m |= {"drum.fore_aft_mode_Hz": fa.fn_fit_Hz, "drum.fore_aft_mode_zeta": fa.xi_fit,
                   "drum.F_x_peak_to_peak_N": float(np.ptp(s["axle_force_x_N"][t >= 0]))}
         m["drum.F_z_peak_to_peak_N"] = float(np.ptp(s["axle_force_N"][t >= 0]))
-        sig["drum"] = (t, s["axle_force_N"])
+        # time from the cleat under the rim centre (the ring's panel is drawn the same way); a folder
+        # made before E03 recorded that time keeps the touch as its origin
+        centre = float(info.get("t_cleat_centre_s", info["t_cleat_touch_s"]) - info["t_cleat_touch_s"])
+        sig["drum"] = (t - centre, s["axle_force_N"])
     d = _case_dir(char_dir, "lateral_stiffness", load_N, pressure_Pa)
     if d is not None:
         q = results.read_result(d)["quantities"]

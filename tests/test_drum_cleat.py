@@ -204,6 +204,12 @@ def test_quasi_static_crossing_and_its_tandem_cam(e03):
     assert np.max(np.abs(slope + slope[::-1])) < 1e-3 + 1e-3 * np.max(np.abs(slope))
     assert np.all(w > -1e-6) and np.all(w < h + 1e-6) and np.max(w) > 0.5 * h
     assert abs(w[0]) < 1e-6 and abs(w[-1]) < 1e-6
+    # the cleat passes the rim centre between its touch and its leaving, halfway to within the patch's
+    # fore-aft asymmetry at the start of the roll (a few % of the span on the coarse ring)
+    i = r.info
+    span = i["t_cleat_leave_s"] - i["t_cleat_touch_s"]
+    assert i["t_cleat_touch_s"] < i["t_cleat_centre_s"] < i["t_cleat_leave_s"]
+    assert abs(i["t_cleat_centre_s"] - 0.5 * (i["t_cleat_touch_s"] + i["t_cleat_leave_s"])) < 0.05 * span
     q = r.quantities
     assert q["enveloping_max_height_m"] == pytest.approx(np.max(w))
     assert q["enveloping_fit_rms_height_m"] < 0.15 * q["enveloping_max_height_m"]

@@ -103,6 +103,12 @@ def test_ring_rolling_slowly_over_the_cam_is_quasi_static(d):
     assert rise > 0.1 * fz0  # the cleat is felt
     assert np.max(np.abs(fz - pred)) < 0.02 * rise
     assert r.info["enveloping"].startswith("tandem")
+    # the validation figure counts time from the crest under the rim centre: the symmetric cam's w
+    # peaks there (to one sample, 0.5 ms = 0.5 mm of travel)
+    from jtire.rigid_ring.validation import ring_signals
+
+    t_fig, _ = ring_signals({"drum": r})["drum"]
+    assert abs(t_fig[int(np.argmax(w))]) <= 0.5e-3 + 1e-12
 
 
 def test_validation_judges_peak_to_peak_only_through_the_cam(d):

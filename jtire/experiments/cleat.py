@@ -292,6 +292,7 @@ class DrumCleat(Experiment):
         ts = np.linspace(t, t + float(self.t_impact()), n)
         t_touch = t + float(self.lead_time)
         t_leave = t + (mem["phi_imp"] - mem["phi_leave"]) / (V / R_d)
+        t_centre = t + mem["phi_imp"] / (V / R_d)  # the cleat under the rim centre (phi = 0)
         s = jax.tree_util.tree_map(np.asarray, imp.saved)
         fc, bz, f_axle, spin = s["contact_force"][:, 2], s["belt_disp"][:, 2], s["tire_on_rim"][:, 2], s["qd"][:, 4]
         band = self.f_band
@@ -326,7 +327,8 @@ class DrumCleat(Experiment):
             "axle_force": "tire_on_rim z: the tire's force on the rim (beads and rim closure pressure)",
             "drum_radius_m": R_d, "surface_speed_m_s": V, "cleat_radius_m": float(self.cleat_radius),
             "cleat_height_m": float(self.cleat_height), "cleat_height_note": "not given by the study: a config choice",
-            "t_cleat_touch_s": t_touch, "t_cleat_leave_s": t_leave, "spectrum_from_s": t_leave,
+            "t_cleat_touch_s": t_touch, "t_cleat_leave_s": t_leave, "t_cleat_centre_s": t_centre,
+            "spectrum_from_s": t_leave,
             "sample_rate_Hz": self.sample_rate, "f_band_Hz": list(band),
             "spectrum": sp.as_dict(), "spectrum_contact_force": sp_c.as_dict()} | env_info
         sig = {"time_s": ts - t_touch, "axle_force_N": f_axle, "axle_force_x_N": s["tire_on_rim"][:, 0],

@@ -170,7 +170,8 @@ def drum_cleat(d: Derived, speed=50 / 3.6, cleat_diameter=0.2, cleat_height=0.02
                            "ellips": d.ellips, "enveloping": "none (point contact follows the cleat profile)"
                            if d.ellips is None else
                            "tandem cam (l_s, a_e, b_e, c_e) = ({:.4g}, {:.4g}, {:.4g}, {:.4g}) from E03".format(*d.ellips),
-                           "t_free_s": t_free, "t_touch_s": _first_rise(ts, out["z_road"])})
+                           "t_free_s": t_free, "t_touch_s": _first_rise(ts, out["z_road"]),
+                           "t_centre_s": s_c / speed})
 
 
 def _first_rise(t, z, eps=1e-7):

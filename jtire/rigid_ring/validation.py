@@ -129,7 +129,8 @@ def ring_signals(results: dict) -> dict:
         out["drop"] = (s["time_s"] - results["drop"].quantities["first_contact_s"], s["rim_z_from_rest_m"])
     if "drum" in results:
         s = results["drum"].signals
-        out["drum"] = (s["time_s"] - results["drum"].info.get("t_touch_s", 0.0), s["spindle_F_z_N"])  # from the touch
+        info = results["drum"].info  # time from the cleat's crest under the rim centre
+        out["drum"] = (s["time_s"] - info.get("t_centre_s", info.get("t_touch_s", 0.0)), s["spindle_F_z_N"])
     if "lateral" in results:
         s = results["lateral"].signals
         out["lateral"] = (s["time_s"], s["rim_y_m"])
@@ -141,7 +142,7 @@ def ring_signals(results: dict) -> dict:
 
 
 PANELS = (("drop", "drop test: rim height above where it rests under the load", "t from first contact (s)",
-           "rim z - z_rest (m)"), ("drum", "drum-cleat", "t from the cleat's touch (s)", "spindle F_z (N)"),
+           "rim z - z_rest (m)"), ("drum", "drum-cleat", "t from the cleat under the rim centre (s)", "spindle F_z (N)"),
           ("lateral", "lateral release", "t (s)", "rim y (m)"),
           ("step_5", "slip step, 5 m/s", "distance s (m)", "F_y SAE (N)"),
           ("step_15", "slip step, 15 m/s", "distance s (m)", "F_y SAE (N)"))
