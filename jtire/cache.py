@@ -113,3 +113,40 @@ def clears() -> int:
     """How many times this process dropped its in-memory programs (a program used after a clear is
     traced again, so tests that count traces account for it)."""
     return _CLEARS[0]
+
+
+# tracing, lowering and compiling (or loading from the persistent cache) a program: jax.monitoring's
+# compile events, each also recorded as a time span
+COMPILE_EVENTS = ("/jax/core/compile/jaxpr_trace_duration", "/jax/core/compile/jaxpr_to_mlir_module_duration",
+                  "/jax/core/compile/backend_compile_duration")
+
+
+class CompileClock:
+    """Wall seconds spent making programs (COMPILE_EVENTS) while the `with` block runs: the union of
+    the events' time spans, so a trace nested in another's, or compiles on two threads at once, count
+    once. A cost measured in run time can then leave out what a warm compilation cache would not pay."""
+
+    def __enter__(self):
+        import jax
+
+        self._spans = []
+        jax.monitoring.register_event_time_span_listener(self._on)
+        return self
+
+    def _on(self, event, start, end, **_):
+        if event in COMPILE_EVENTS:
+            self._spans.append((start, end))
+
+    def __exit__(self, *exc):
+        import jax
+
+        jax.monitoring.unregister_event_time_span_listener(self._on)
+
+    @property
+    def seconds(self) -> float:
+        total, top = 0.0, -float("inf")
+        for a, b in sorted(self._spans):
+            if b > top:
+                total += b - max(a, top)
+                top = b
+        return total

@@ -137,3 +137,27 @@ def test_code_version_hashes_the_sources(tmp_path, monkeypatch):
     (copy / "units.py").write_text((copy / "units.py").read_text() + "# an edit\n")
     edited = subprocess.run([sys.executable, "-c", cmd], capture_output=True, text=True, env=env, cwd=tmp_path)
     assert edited.stdout.split()[1] != v, edited.stderr[-2000:]
+
+
+def test_compile_clock_counts_making_a_program_not_running_it():
+    """cache.CompileClock: a new program's trace, lowering and compile are counted (more than 0, and
+    no more than the block's wall: a trace nested in another's counts once), the same call again
+    makes nothing (0); the calibration charges a Jacobian its wall less this."""
+    import time
+
+    import jax
+    import jax.numpy as jnp
+
+    c0 = float(np.random.default_rng().random())  # a constant no earlier program holds: a fresh compile
+    inner = jax.jit(lambda x: jnp.sin(x) * c0)
+    f = jax.jit(lambda x: inner(x) + jnp.cos(inner(x)))
+    x = jnp.arange(7.0)
+    with cache.CompileClock() as first:
+        t0 = time.perf_counter()
+        f(x).block_until_ready()
+        wall = time.perf_counter() - t0
+    assert 0.0 < first.seconds <= wall + 1e-3
+    with cache.CompileClock() as again:
+        f(x).block_until_ready()
+    assert again.seconds == 0.0
+    assert not any(first._on == cb for cb in jax._src.monitoring._event_time_span_listeners)  # unregistered

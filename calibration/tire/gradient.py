@@ -22,8 +22,8 @@ costs one run, and a budget that cannot pay for the next Jacobian still takes th
 paid for (with a Jacobian at every trial, a small budget can end at the base tire without trying
 a step: docs/design-notes.md). Each call is recorded with its forward-run
 equivalents (`Simulator.cost_forward_equivalents`; the shell model measures a Jacobian's: the
-call's wall time over a timed forward evaluation of the same targets, its first call charged the
-two reference evaluations and its compiling) and wall time, in the same history format as ARSM,
+call's wall time, less its compiling, over a timed forward evaluation of the same targets, its first
+call charged the two reference evaluations) and wall time, in the same history format as ARSM,
 so a killed run resumes by replay.
 """
 
