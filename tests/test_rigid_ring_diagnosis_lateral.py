@@ -71,6 +71,44 @@ def test_steady_F_y_from_an_unsettled_E10_window(tmp_path, char, rated):
     assert x.state == dg.NONE  # without the E10 record the shortfall is not established
 
 
+def test_steady_F_y_against_the_shells_steady_solve_at_the_steps_speed(tmp_path, char, rated):
+    """The validation also solves the shell in steady rolling at each step's speed and angle
+    (validate.steady_references, DIR/validation/steady_<v>_m_s). The ring carries E10's curve (at
+    E10's speed); the shell's step differs from it by the steady force's change with speed and by the
+    transient's own gap to the steady solve. With both measured and the ring on the curve it was
+    built from, the miss is the shell's two steps, each named with its number (FULL)."""
+    from jtire.validate import steady_reference_folder
+
+    d = derive(rated, char.tire)
+    a = math.radians(2.0)
+    lin = d.k_f * math.sin(a)
+    curve = abs(float(np.interp(2.0, rated.curves.slip_angle_deg, rated.curves.wheel_lateral_force()[0])))
+    ref = 0.975 * curve  # the steady force at 15 m/s, 2.5 % below E10's speed's
+    shell = 0.95 * ref  # the transient settles 5 % below its steady solve
+    write_case(tmp_path / "validation" / steady_reference_folder(15.0), "load_levels_3", rated, {"quantities": {}},
+               {"slip_angle_deg": [0.0, 1.0, 2.0], "F_y_SAE_N": [0.0, -ref / 2, -ref],
+                "M_z_SAE_Nm": [0.0, 50.0, 100.0]})
+    ring = _step_metrics(d, a, lin, lin)
+    x = explain(char, rated, _step_metrics(d, a, lin, shell), ring, char_dir=tmp_path)["step_15.F_y_steady_N"]
+    assert x.state == dg.FULL and "steady-rolling solve at 15 m/s" in x.text
+    assert "settles -5.0 % from it" in x.text and "changes -2.5 %" in x.text
+    # a failed reference is said, not skipped
+    for n in (2, 3, 5):
+        d2 = tmp_path / "v2" / "validation" / steady_reference_folder(15.0) / f"load_levels_{n}" / "cases"
+        (d2 / "000_p120psi_l4625kg").mkdir(parents=True)
+        (d2 / "000_p120psi_l4625kg" / "error.txt").write_text(f"cornering: steady rolling, load 1/{n}: not found\n")
+    x = explain(char, rated, _step_metrics(d, a, lin, shell), ring, char_dir=tmp_path / "v2")["step_15.F_y_steady_N"]
+    assert "solve at 15 m/s, the reference for this split, failed: cornering: steady rolling, load 1/5" in x.text
+    # a later try that converged is the reference (2 levels failed, 3 did)
+    write_case(tmp_path / "v2" / "validation" / steady_reference_folder(15.0), "load_levels_3", rated, {"quantities": {}},
+               {"slip_angle_deg": [0.0, 1.0, 2.0], "F_y_SAE_N": [0.0, -ref / 2, -ref]})
+    x = explain(char, rated, _step_metrics(d, a, lin, shell), ring, char_dir=tmp_path / "v2")["step_15.F_y_steady_N"]
+    assert x.state == dg.FULL and "failed" not in x.text
+    # without a reference the bullet is as before
+    x = explain(char, rated, _step_metrics(d, a, lin, shell), ring)["step_15.F_y_steady_N"]
+    assert "steady-rolling solve" not in x.text
+
+
 def test_steady_M_z_linear_k_m_vs_curved_M_z(char, rated):
     d = derive(rated, char.tire)
     a = math.radians(2.0)

@@ -45,13 +45,27 @@ def plan_and_folder(tmp_path):
     return load_plan(CHAR), tmp_path
 
 
-def fake_runs(monkeypatch, fail_loads_kg=()):
-    """batch.run replaced: conditions at the given loads fail; returns the list of conditions run."""
+def _steady(condition, speed) -> ExperimentResult:
+    """A made-up steady cornering result at 0, 1 and 2 deg (the validation's steady reference)."""
+    sig = {"slip_angle_deg": np.array([0.0, 1.0, 2.0]), "F_y_SAE_N": np.array([0.0, -1600.0, -3100.0]),
+           "M_z_SAE_Nm": np.array([0.0, 60.0, 118.0])}
+    return ExperimentResult("cornering", dict(condition), {"speed_m_per_s": speed}, signals=sig)
+
+
+def fake_runs(monkeypatch, fail_loads_kg=(), steady=None):
+    """batch.run replaced: slip steps at the given loads fail; returns the list of slip-step conditions
+    run (the steady references' (condition, speed) go to `steady` when given)."""
     ran = []
 
     def run(exp, tire, conditions, *a, on_result=None, **kw):
         out = []
         for i, c in enumerate(conditions):
+            if exp.name == "cornering":
+                v = float(exp.speed)
+                if steady is not None:
+                    steady.append((c, v))
+                on_result(i, _steady(c, v))
+                continue
             ran.append(c)
             fail = any(abs(c["load_N"] - kg * 9.81) < 1e-6 for kg in fail_loads_kg)
             r = batch.CaseFailure(c, SimulationError("slip step: blew up at 0.12 s")) if fail else _step(c)
@@ -92,6 +106,85 @@ def test_failed_step_is_a_visible_row_saved_and_retried_on_resume(plan_and_folde
     assert not list((folder / "validation" / "cases").glob("*/error.txt"))
     for _, rows, s_sig, _, _ in res:
         assert "step_5" in s_sig and not any(r.verdict == "SHELL RUN FAILED" for r in rows)
+
+
+def test_steady_references_are_saved_per_speed_and_resumed(plan_and_folder, monkeypatch):
+    """Beside the steps, the shell's steady solve at each step's speed and angle (E10's method) is run
+    per condition into DIR/validation/steady_<v>_m_s, with the step's angle as the last of three, and a
+    resume runs none of them again."""
+    from jtire.validate import steady_references
+
+    plan, folder = plan_and_folder
+    steady = []
+    fake_runs(monkeypatch, steady=steady)
+    validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
+    assert sorted({round(v, 6) for _, v in steady}) == [5.0, 15.0] and len(steady) == 6
+    for v in (5, 15):
+        cases = sorted((folder / "validation" / f"steady_{v}_m_s" / "load_levels_2" / "cases").iterdir())
+        assert len(cases) == 3 and all((c / "result.json").is_file() for c in cases)
+    refs = steady_references(folder, plan, [c for c, _ in steady[:3]], STEP_TABLE)
+    assert list(refs) == [5.0, 15.0] and all(len(r) == 3 and r[0].signals["slip_angle_deg"][-1] == 2.0
+                                             for r in refs.values())
+    steady.clear()
+    validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
+    assert steady == []
+
+
+def test_a_failed_steady_reference_is_tried_again_with_more_load_levels(plan_and_folder, monkeypatch):
+    """A condition whose steady loading at speed failed is run again with 3, then 5 load levels (each
+    try its own folder), only that condition; what finally fails is returned as its error."""
+    from jtire.validate import REFERENCE_LOAD_LEVELS, steady_references
+
+    plan, folder = plan_and_folder
+    tries = []
+
+    def run(exp, tire, conditions, *a, on_result=None, **kw):
+        for i, c in enumerate(conditions):
+            tries.append((exp.load_levels, round(c["load_N"])))
+            ok = c["load_N"] > 40000 or tries[-1][0] == 3  # the light condition converges with 3 levels
+            on_result(i, _steady(c, float(exp.speed)) if ok else
+                      batch.CaseFailure(c, SimulationError("steady rolling, load 1/2: not found")))
+
+    monkeypatch.setattr(batch, "run", run)
+    monkeypatch.setattr("jtire.tire.make_tire", lambda spec: None)
+    conds = [{"load_N": 45000.0, "pressure_Pa": 8.27e5}, {"load_N": 22500.0, "pressure_Pa": 8.27e5}]
+    refs = steady_references(folder, plan, conds, {"speeds_m_per_s": [15.0]})
+    assert REFERENCE_LOAD_LEVELS[:2] == (2, 3)
+    assert tries == [(2, 45000), (2, 22500), (3, 22500)]
+    assert all(not isinstance(r, str) for r in refs[15.0])
+    # a condition that fails every try: its last error
+    tries.clear()
+    monkeypatch.setattr(batch, "run", lambda exp, tire, conditions, *a, on_result=None, **kw: [
+        on_result(i, batch.CaseFailure(c, SimulationError(f"load 1/{exp.load_levels}: not found")))
+        for i, c in enumerate(conditions)])
+    refs = steady_references(folder / "again", plan, conds[:1], {"speeds_m_per_s": [15.0]})
+    assert refs[15.0] == [f"load 1/{REFERENCE_LOAD_LEVELS[-1]}: not found"]
+
+
+def test_steady_reference_experiment_is_the_steps_angle_and_speed(plan_and_folder, monkeypatch):
+    """The reference is E10's steady method at the step's speed, its angles 0, half and all of the
+    step's (a step of -3 deg: a range over [-3, 0]); a step of 0 deg has none."""
+    from jtire.validate import steady_references
+
+    plan, folder = plan_and_folder
+    seen = []
+
+    def run(exp, tire, conditions, *a, on_result=None, **kw):
+        seen.append(exp)
+        for i, c in enumerate(conditions):
+            on_result(i, _steady(c, float(exp.speed)))
+
+    monkeypatch.setattr(batch, "run", run)
+    monkeypatch.setattr("jtire.tire.make_tire", lambda spec: None)
+    conds = [{"load_N": 45000.0, "pressure_Pa": 8.27e5}]
+    steady_references(folder, plan, conds, {"speeds_m_per_s": [7.0], "slip_angle_deg": -3.0})
+    (exp,) = seen
+    assert exp.method == "steady" and float(exp.speed) == pytest.approx(7.0, rel=1e-12)
+    assert np.degrees(exp.slip_angles) == pytest.approx([0.0, -1.5, -3.0], abs=1e-12)
+    assert steady_references(folder, plan, conds, {"speeds_m_per_s": [7.0], "slip_angle_deg": 0.0}) == {}
+    # a step faster than E10's config allows (60 mph = 26.8 m/s) has no reference, and no error
+    seen.clear()
+    assert list(steady_references(folder / "again", plan, conds, {"speeds_m_per_s": [7.0, 30.0]})) == [7.0]
 
 
 def test_resume_runs_nothing_finished_and_other_settings_refuse(plan_and_folder, monkeypatch):

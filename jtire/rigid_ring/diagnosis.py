@@ -9,8 +9,8 @@ that the cause was not established.
     linearized equations (`modes`: numpy, the same equations as `model.RigidRing`, no simulation),
   * optionally the characterization folder `char_dir` (the shell's case folders: the E02
     load-deflection curve, the E04 drop record's reductions, the E03 spindle F_x record, the E10
-    measurement window) and the shell's validation signals (`shell_signals`, as `validate.validate`
-    returns them: the slip-step F_y against distance).
+    measurement window, the validation's steady references) and the shell's validation signals
+    (`shell_signals`, as `validate.validate` returns them: the slip-step F_y against distance).
 Every number in a bullet is computed from those inputs. A cause counts as established (FULL) when
 the mechanism named, put into numbers, accounts for the disagreement within the metric's own
 tolerance; PARTIAL when it closes more than half of it (the bullet then says the rest is not
@@ -26,7 +26,8 @@ Causes the checks look for (each found on the default mesh; see the module's tes
   * drum peak-to-peak forces: the quasi-static swing the cam gives (k_vt w_max; 2 F_z slope_max)
     against the shell's and the ring's at speed;
   * lateral release: the reduced lateral model (m_tot on k_l) against the belt's own DOFs;
-  * slip step: speed dependence of the shell, the E10 window not yet steady, the linear k_m against
+  * slip step: speed dependence of the shell, the step's transient against the shell's own steady
+    solve at its speed (the validation's steady references), the E10 window not yet steady, the linear k_m against
     the curved M_z(alpha), and a first-order lag over sigma = k_f / k_l against a contact patch of
     finite length (stretched string: sigma_string = sigma - a).
 """

@@ -3,9 +3,11 @@ damping) and the slip step (steady F_y and M_z, relaxation length s63), against 
 window. Each check takes the condition's context and the comparison row and returns (state, text)."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 
+from .. import results
 from .diagnosis_base import FULL, NONE, PARTIAL, _damping, _n, _p, _verdict, _within
 from .modes import lateral_modes, string_step_s63
 
@@ -81,6 +83,30 @@ def _e10_settling(cx, alpha):
     return drift, v * w, v, drift * cx.d.sigma / (v * w)
 
 
+def _steady_reference(cx, v, key):
+    """(|F_y| or |M_z| (SAE) of the shell's steady solve at speed v (m/s) and the step's angle (the
+    largest of the references' angles), or None; its error message when that solve failed, or None),
+    from the validation's steady references (validate.steady_references)."""
+    if cx.char_dir is None:
+        return None, None
+    from ..validate import steady_reference_folder
+
+    tries = sorted((Path(cx.char_dir) / "validation" / steady_reference_folder(v)).glob("load_levels_*"),
+                   key=lambda f: int(f.name.rsplit("_", 1)[1]))
+    d = next((c for c in (results.find_case(results.cases_dir(f), cx.load_N, cx.pressure_Pa) for f in tries)
+              if c is not None), None)
+    if d is None:  # a failed case has no result.json: found by its name's condition part; the last try's error
+        tail = results.case_name(0, {"load_N": cx.load_N, "pressure_Pa": cx.pressure_Pa}).split("_", 1)[1]
+        errors = [results.read_error(c) for f in tries for c in sorted(results.cases_dir(f).glob(f"*_{tail}"))]
+        return None, next((e for e in reversed(errors) if e), None)
+    sig = results.read_signals(d)
+    col = "F_y_SAE_N" if key == "F_y" else "M_z_SAE_Nm"
+    if not sig or col not in sig:
+        return None, None
+    i = int(np.argmax(np.abs(np.asarray(sig["slip_angle_deg"], float))))
+    return float(abs(sig[col][i])), None
+
+
 def _step_force(cx, c, key):
     d = cx.d
     alpha = _step_alpha(cx)
@@ -114,6 +140,23 @@ def _step_force(cx, c, key):
                          f"ring does not have)")
             if state == NONE and curve and _within(lin, curve, c.tolerance) and abs(dv) > 0.5 * abs(c.rel_diff):
                 state = FULL
+    ref, failed = _steady_reference(cx, v_here, key)
+    if failed:
+        parts.append(f"the shell's steady-rolling solve at {v_here:g} m/s, the reference for this split, failed: "
+                     f"{failed.splitlines()[0]}")
+    if ref is not None:
+        ring = abs(c.ring)
+        parts.append(f"the shell's steady-rolling solve at {v_here:g} m/s and the step's angle gives {_n(ref, unit)}: "
+                     f"the step's transient settles {_p(shell / ref - 1)} from it (the transient's own gap to the "
+                     f"steady solve, docs/steady-rolling.md), and the ring is {_p(ring / ref - 1)} from it")
+        if curve:
+            parts.append(f"from E10's speed to {v_here:g} m/s the steady {key} changes {_p(ref / curve - 1)}")
+        if state == NONE:
+            # what the shell's two steps (E10's speed -> this speed, steady -> transient) account for
+            pred = (lin if lin else ring) * (ref / curve if curve else 1.0) * shell / ref
+            state = _verdict(pred, shell, ring, c.tolerance)
+            if state == PARTIAL:
+                parts.append("the rest is not established")
     st = _e10_settling(cx, alpha) if alpha else None
     if st is not None:
         drift, win, v, short = st
