@@ -130,12 +130,13 @@ def slip_steps(char_dir, plan, conds, slip_step_table=None, batch_size=1, on_cas
     return _resumed(Path(char_dir) / "validation", "slip_step", exp, plan, conds, batch_size, on_case)
 
 
-def steady_references(char_dir, plan, conds, slip_step_table=None, batch_size=1) -> dict:
+def steady_references(char_dir, plan, conds, slip_step_table=None, batch_size=1, on_case=None) -> dict:
     """{speed (m/s): per condition, the shell's steady cornering solve (E10's method) at the slip
     step's speed over 0, half and all of its angle (ExperimentResult, or its error message)}: what
     the step's force should settle to, so the diagnosis can split the ring's miss into the shell's
     speed dependence and the transient's own gap to the steady solve. Resumed from
-    DIR/validation/steady_<v>_m_s/load_levels_<n> (`steady_reference_folder`)."""
+    DIR/validation/steady_<v>_m_s/load_levels_<n> (`steady_reference_folder`). on_case as for
+    slip_steps, counting (condition, speed) pairs (a retry's case moves it too, up to the total)."""
     from .config import validate_table
     from .experiments import REGISTRY
 
@@ -146,9 +147,18 @@ def steady_references(char_dir, plan, conds, slip_step_table=None, batch_size=1)
         return out
     speed_field = REGISTRY["cornering"].schema["speed_mph"]
     lo, hi = speed_field.lo * U.MPH, speed_field.hi * U.MPH
-    for v in step["speeds_m_per_s"]:
-        if not lo <= v <= hi:  # past what E10's config takes (the step allows up to 40 m/s): no reference
-            continue
+    # past what E10's config takes (the step allows up to 40 m/s): no reference
+    speeds = [v for v in step["speeds_m_per_s"] if lo <= v <= hi]
+    total, done = len(speeds) * len(conds), [0]
+
+    def tick(name, n_done, n_total):
+        if on_case is not None and name is not None:
+            done[0] += 1
+            on_case(name, min(done[0], total), total)
+
+    if on_case is not None:
+        on_case(None, 0, total)
+    for v in speeds:
         span = sorted([0.0, a])
         got = [None] * len(conds)
         for n in REFERENCE_LOAD_LEVELS:  # a condition whose loading at speed failed is tried again with more levels
@@ -160,7 +170,7 @@ def steady_references(char_dir, plan, conds, slip_step_table=None, batch_size=1)
                                    REGISTRY["cornering"].schema, "cornering")
             exp = REGISTRY["cornering"].from_table(table, _protocol(plan), plan.tire)
             folder = Path(char_dir) / "validation" / steady_reference_folder(v) / f"load_levels_{n}"
-            for i, r in zip(todo, _resumed(folder, "cornering", exp, plan, [conds[i] for i in todo], batch_size, None)):
+            for i, r in zip(todo, _resumed(folder, "cornering", exp, plan, [conds[i] for i in todo], batch_size, tick)):
                 got[i] = r
         out[float(v)] = got
     return out
@@ -233,16 +243,17 @@ def _read_case(folder):
     return results.read_error(folder) or "not run"
 
 
-def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None, on_case=None):
+def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None, on_case=None, on_steady=None):
     """Compare ring and shell at `conditions` ((kg, psi) pairs of the grid). Returns a list of
-    (condition dict, comparison rows, shell signals, ring signals, error of the slip step or None)."""
+    (condition dict, comparison rows, shell signals, ring signals, error of the slip step or None).
+    on_case, on_steady: progress of the slip steps and of the steady references (see slip_steps)."""
     from .rigid_ring import validation
     from .rigid_ring.table import read_characterization
 
     char = read_characterization(char_dir)
     conds = [{"load_N": kg * U.G0, "pressure_Pa": psi * U.PSI} for kg, psi in conditions]
     steps = slip_steps(char_dir, plan, conds, slip_step_table, on_case=on_case)
-    steady_references(char_dir, plan, conds, slip_step_table)  # read back by the diagnosis
+    steady_references(char_dir, plan, conds, slip_step_table, on_case=on_steady)  # read back by the diagnosis
     out = []
     for c, st in zip(conds, steps):
         row = char.row(c["load_N"], c["pressure_Pa"])

@@ -115,10 +115,11 @@ def test_steady_references_are_saved_per_speed_and_resumed(plan_and_folder, monk
     from jtire.validate import steady_references
 
     plan, folder = plan_and_folder
-    steady = []
+    steady, seen = [], []
     fake_runs(monkeypatch, steady=steady)
-    validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
+    validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE, on_steady=lambda *a: seen.append(a[1:]))
     assert sorted({round(v, 6) for _, v in steady}) == [5.0, 15.0] and len(steady) == 6
+    assert seen == [(k, 6) for k in range(7)]  # progress per (condition, speed)
     for v in (5, 15):
         cases = sorted((folder / "validation" / f"steady_{v}_m_s" / "load_levels_2" / "cases").iterdir())
         assert len(cases) == 3 and all((c / "result.json").is_file() for c in cases)

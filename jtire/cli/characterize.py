@@ -91,18 +91,21 @@ def _validate(plan, out, say) -> tuple:
     from ..rigid_ring.diagnosis import diagnose
     from ..rigid_ring.table import read_characterization
 
-    bars = []
+    bars = {}
 
-    def progress(name, n_done, n_total):  # one step per condition: its slip steps at both speeds
-        if not bars:
-            bars.append(tqdm(total=n_total, initial=n_done, desc="validation slip steps", unit="case"))
-        else:
-            bars[0].update(n_done - bars[0].n)
+    def progress(desc):
+        def update(name, n_done, n_total):  # one step per condition (and speed, for the steady references)
+            if desc not in bars:
+                bars[desc] = tqdm(total=n_total, initial=n_done, desc=desc, unit="case")
+            else:
+                bars[desc].update(n_done - bars[desc].n)
+        return update
 
     try:
-        res = validate(out, plan, conds, on_case=progress)
+        res = validate(out, plan, conds, on_case=progress("validation slip steps"),
+                       on_steady=progress("validation steady references"))
     finally:
-        for bar in bars:
+        for bar in bars.values():
             bar.close()
     char = read_characterization(out)
     text, written, failed = ["## Rigid ring vs shell model\n"], [], []
