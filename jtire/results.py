@@ -56,6 +56,12 @@ def case_name(i: int, c: dict) -> str:
     return name
 
 
+def steady_reference_folder(speed) -> str:
+    """DIR/validation/<this>: the validation's steady references at a slip step's speed (m/s), one
+    subfolder load_levels_<n> per try (`validate.steady_references`)."""
+    return f"steady_{speed:g}_m_s"
+
+
 def cases_dir(root, experiment: str | None = None) -> Path:
     """DIR/cases (a sweep) or DIR/<experiment>/cases (a characterization)."""
     return Path(root) / "cases" if experiment is None else Path(root) / experiment / "cases"

@@ -135,7 +135,7 @@ def steady_references(char_dir, plan, conds, slip_step_table=None, batch_size=1,
     step's speed over 0, half and all of its angle (ExperimentResult, or its error message)}: what
     the step's force should settle to, so the diagnosis can split the ring's miss into the shell's
     speed dependence and the transient's own gap to the steady solve. Resumed from
-    DIR/validation/steady_<v>_m_s/load_levels_<n> (`steady_reference_folder`). on_case as for
+    DIR/validation/steady_<v>_m_s/load_levels_<n> (`results.steady_reference_folder`). on_case as for
     slip_steps, counting (condition, speed) pairs (a retry's case moves it too, up to the total)."""
     from .config import validate_table
     from .experiments import REGISTRY
@@ -169,17 +169,11 @@ def steady_references(char_dir, plan, conds, slip_step_table=None, batch_size=1,
                                     "kf_range_deg": span, "km_range_deg": span, "steady_load_levels": n},
                                    REGISTRY["cornering"].schema, "cornering")
             exp = REGISTRY["cornering"].from_table(table, _protocol(plan), plan.tire)
-            folder = Path(char_dir) / "validation" / steady_reference_folder(v) / f"load_levels_{n}"
+            folder = Path(char_dir) / "validation" / results.steady_reference_folder(v) / f"load_levels_{n}"
             for i, r in zip(todo, _resumed(folder, "cornering", exp, plan, [conds[i] for i in todo], batch_size, tick)):
                 got[i] = r
         out[float(v)] = got
     return out
-
-
-def steady_reference_folder(speed) -> str:
-    """DIR/validation/<this>: the steady references at a slip step's speed (m/s), one subfolder
-    load_levels_<n> per try (REFERENCE_LOAD_LEVELS)."""
-    return f"steady_{speed:g}_m_s"
 
 
 # load levels of the steady loading at speed, tried in turn for a condition whose loading failed (E10

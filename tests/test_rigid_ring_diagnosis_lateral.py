@@ -77,7 +77,7 @@ def test_steady_F_y_against_the_shells_steady_solve_at_the_steps_speed(tmp_path,
     E10's speed); the shell's step differs from it by the steady force's change with speed and by the
     transient's own gap to the steady solve. With both measured and the ring on the curve it was
     built from, the miss is the shell's two steps, each named with its number (FULL)."""
-    from jtire.validate import steady_reference_folder
+    from jtire.results import steady_reference_folder
 
     d = derive(rated, char.tire)
     a = math.radians(2.0)

@@ -89,9 +89,7 @@ def _steady_reference(cx, v, key):
     from the validation's steady references (validate.steady_references)."""
     if cx.char_dir is None:
         return None, None
-    from ..validate import steady_reference_folder
-
-    tries = sorted((Path(cx.char_dir) / "validation" / steady_reference_folder(v)).glob("load_levels_*"),
+    tries = sorted((Path(cx.char_dir) / "validation" / results.steady_reference_folder(v)).glob("load_levels_*"),
                    key=lambda f: int(f.name.rsplit("_", 1)[1]))
     d = next((c for c in (results.find_case(results.cases_dir(f), cx.load_N, cx.pressure_Pa) for f in tries)
               if c is not None), None)
