@@ -284,8 +284,10 @@ def test_peak_to_peak_against_the_cams_quasi_static_swing(tmp_path, char, rated)
 def test_fore_aft_frequency_and_the_isotropy_assumption(char, rated):
     d = derive(rated, char.tire)
     v = 50 / 3.6
-    m0 = max(dg.fore_aft_modes(d, v), key=lambda m: m[2])
-    m15 = min(dg.fore_aft_modes(d, v, k_bx=1.5 * d.k_bz), key=lambda m: abs(m[0] - 1.2 * m0[0]))
+    # the modes that ring (an overdamped one puts no peak in the metric's spectrum)
+    m0 = max([m for m in dg.fore_aft_modes(d, v) if m[1] < 0.5], key=lambda m: m[2])
+    m15 = min([m for m in dg.fore_aft_modes(d, v, k_bx=1.5 * d.k_bz) if m[1] < 0.5],
+              key=lambda m: abs(m[0] - 1.2 * m0[0]))
     r = explain(char, rated, {"drum.fore_aft_mode_Hz": m15[0]}, {"drum.fore_aft_mode_Hz": m0[0]})
     x = r["drum.fore_aft_mode_Hz"]
     assert x.state == dg.FULL and "isotropy" in x.text and "(1.5 x the ring's)" in x.text

@@ -221,9 +221,14 @@ def _drum_speed(cx):
     return v
 
 
+RINGING_ZETA = 0.5  # a mode damped more than this puts no peak in a spectrum: it cannot be a metric's
+
+
 def _fore_aft_mode(cx, target, speed, **kw):
-    """The mode of fore_aft_modes() nearest target (Hz), or the one with the largest x_b share."""
-    ms = fore_aft_modes(cx.d, speed, **kw)
+    """The mode of fore_aft_modes() nearest target (Hz), or the one with the largest x_b share, among
+    those that ring (zeta < RINGING_ZETA: the tread string's own transport modes, zeta 0.6-0.7 near
+    the drum's band, are left out with the rest of the overdamped ones)."""
+    ms = [m for m in fore_aft_modes(cx.d, speed, **kw) if m[1] < RINGING_ZETA]
     if not ms:
         return None
     if target is not None:
@@ -319,7 +324,7 @@ def _drum_fore_aft_zeta(cx, c):
     z_none = _fore_aft_mode(cx, m0[0], v, C_bx=0.0, C_btheta=0.0)[1]
     f_bx = math.sqrt(d.k_bx / d.tire.m_b_kg) / (2 * math.pi)
     z_bx = d.C_bx / (2 * math.sqrt(d.k_bx * d.tire.m_b_kg))
-    txt = (f"of the ring's modal zeta {m0[1]:.3g}, the rolling tread's slip lag (contact relaxation length a, "
+    txt = (f"of the ring's modal zeta {m0[1]:.3g}, the rolling tread (the brush through the contact patch, "
            f"V = {v:.3g} m/s) gives {z_none:.3g} alone, C_btheta {z_nobx - z_none:.2g}, and C_bx = "
            f"{_n(d.C_bx, 'N s/m')} ({d.k_bx_source}) the rest: zeta_bx = {z_bx:.3g} at f_bx = {_n(f_bx, 'Hz')}")
     if not d.k_bx_measured:

@@ -9,6 +9,7 @@ import numpy as np
 
 from .. import results
 from .diagnosis_base import FULL, NONE, PARTIAL, _damping, _n, _p, _verdict, _within
+from .model import CONTACT
 from .modes import lateral_modes, string_step_s63
 
 
@@ -169,14 +170,23 @@ def _step_force(cx, c, key):
 def _step_s63(cx, c):
     d = cx.d
     v_here = float(c.metric.split(".")[0][5:])
-    parts, state = [f"the ring is a first-order lag over sigma = k_f/k_l = {_n(d.sigma, 'm')} at any speed "
-                    f"(s63 = {_n(c.ring, 'm')})"], NONE
-    s_str = string_step_s63(d.sigma, d.a) if d.sigma and d.a else None
+    state, s_str = NONE, (string_step_s63(d.sigma, d.a) if d.sigma and d.a else None)
+    if CONTACT == "string":
+        parts = [f"the ring's tread is a stretched string through the patch on its belt's lateral springs, sigma = "
+                 f"k_f/k_l = {_n(d.sigma, 'm')} in all (s63 = {_n(c.ring, 'm')}, {c.ring / d.sigma:.2g} sigma)"]
+        if s_str:
+            parts.append(f"Pacejka's quasi-static stretched string with the same k_f/k_l and a = {_n(d.a, 'm')} reaches "
+                         f"63 % at {_n(s_str, 'm')} ({s_str / d.sigma:.2g} sigma; {_p(s_str / c.shell - 1)} against the "
+                         f"shell); the ring's belt masses and tread damper move it {_p(c.ring / s_str - 1)}")
+    else:
+        parts = [f"the ring is a first-order lag over sigma = k_f/k_l = {_n(d.sigma, 'm')} at any speed "
+                 f"(s63 = {_n(c.ring, 'm')})"]
+        if s_str:
+            parts.append(f"a contact patch of half length a = {_n(d.a, 'm')} builds part of the force inside its own "
+                         f"length: a stretched string with the same k_f/k_l (sigma_string = sigma - a = "
+                         f"{_n(d.sigma - d.a, 'm')}) reaches 63 % at {_n(s_str, 'm')} ({s_str / d.sigma:.2g} sigma; "
+                         f"{_p(s_str / c.shell - 1)} against the shell)")
     if s_str:
-        parts.append(f"a contact patch of half length a = {_n(d.a, 'm')} builds part of the force inside its own "
-                     f"length: a stretched string with the same k_f/k_l (sigma_string = sigma - a = "
-                     f"{_n(d.sigma - d.a, 'm')}) reaches 63 % at {_n(s_str, 'm')} ({s_str / d.sigma:.2g} sigma; "
-                     f"{_p(s_str / c.shell - 1)} against the shell)")
         state = _verdict(s_str, c.shell, c.ring, c.tolerance)
     for vo in [v for v in _speeds(cx) if v != v_here]:
         so = cx.val(f"step_{vo:g}.s63_m", "shell")

@@ -5,9 +5,24 @@ and the road moves under it at the speed V (a flat-track or drum machine; the dr
 not modelled). Slip angles inside are ISO (alpha > 0: the wheel travels to the LEFT of its heading,
 the road pushes it right, F_y < 0); scenarios take SAE angles and convert (alpha_ISO = -alpha_SAE).
 
-State y (22,): positions q (10,) = [x_a, z_a, theta_a, x_b, z_b, theta_b, y_a, gamma_a, y_b,
+State y (N_STATE,): positions q (10,) = [x_a, z_a, theta_a, x_b, z_b, theta_b, y_a, gamma_a, y_b,
 gamma_b] (rim a, belt b; m, rad), their velocities (10,), then the contact's tread deflections u
-(longitudinal, m) and e (lateral, m; in the reduced model the whole tire's lateral deflection).
+(longitudinal, m) and e (lateral, m; in the reduced model the whole tire's lateral deflection), then
+the tread strings' node deflections (N_TREAD longitudinal, N_TREAD lateral; contact = "string").
+
+Contact = "lag" (MF-Swift's first-order slip lags, below) or "string" (the default): the tread
+through the patch as a stretched string (Pacejka, Tyre and Vehicle Dynamics §5.4): its contact points
+stick to the road and are carried from the leading edge (xi = 0) to the trailing one (xi = 2a) at
+|V|, de/dt + |V| de/dxi = v_c (v_c the belt's slip velocity there), the leading edge's deflection
+e_1 relaxes over the free string, sigma_s de_1/dt + |V| e_1 = sigma_s v_c, and the force is
+c (sigma_s (e_1 + e(2a)) + int e dxi). Longitudinally sigma_s = 0 (a brush); laterally sigma_s =
+sigma_c - a. With c = k_f / (2 (sigma_s + a)^2) it has the lag's steady force and static stiffness
+k_f / (sigma_s + a); what differs is its response to slip that varies within a patch transit
+(2a / |V|): the lag over-damps it (at 60 Hz and 13.9 m/s five times the string's dissipation,
+docs/rigid-ring.md §5). Nodes: Chebyshev-Gauss-Lobatto behind the leading edge (spectral: with 6
+nodes the continuous string's transfer function to 0.1 % of its steady value up to omega 2a/|V| = 6,
+1 % up to 10). Linear, no
+sliding, like the lag; |V| is taken as the speed in either direction.
 
 In-plane (Zegelaar & Pacejka; §4): belt and rim joined by the sidewall springs/dampers
 (k_bx, C_bx; k_bz, C_bz; k_btheta, C_btheta); the belt stands on the residual spring
@@ -48,9 +63,15 @@ from .. import enveloping
 from .params import RigidRingParams
 
 N_Q = 10
-N_STATE = 2 * N_Q + 2
+N_TREAD = 6  # string nodes behind the leading edge (see `_chebyshev`)
+N_STATE = 2 * N_Q + 2 + 2 * N_TREAD
 IDX = {"x_a": 0, "z_a": 1, "theta_a": 2, "x_b": 3, "z_b": 4, "theta_b": 5, "y_a": 6, "gamma_a": 7, "y_b": 8,
        "gamma_b": 9, "u": 20, "e": 21}
+U_NODES = tuple(range(22, 22 + N_TREAD))
+E_NODES = tuple(range(22 + N_TREAD, 22 + 2 * N_TREAD))
+CONTACTS = ("string", "lag")
+CONTACT = "string"  # the default: the string matches the shell's build-up and drum modes (docs/rigid-ring.md §5)
+SIGMA_S_MIN = 0.1  # x a: the free string's shortest length (a shorter one would make e_1 stiff)
 RIM = (0, 1, 2, 6, 7)
 BELT = (3, 4, 5, 8, 9)
 VXLOW = 1.0  # m/s: below it the low-speed tread damping is on (MF VXLOW)
@@ -118,6 +139,48 @@ def slip_angle(drive: Drive, t):
     return drive.alpha_iso * 0.5 * (1.0 - jnp.cos(jnp.pi * x))
 
 
+def _chebyshev(n):
+    """Chebyshev-Gauss-Lobatto differentiation matrix (n+1, n+1) and Clenshaw-Curtis weights (n+1,)
+    on [0, 1], node 0 at 0 (the leading edge), node n at 1 (the trailing edge)."""
+    import numpy as np
+
+    k = np.arange(n + 1)
+    x = np.cos(np.pi * k / n)  # 1 .. -1
+    c = np.where((k == 0) | (k == n), 2.0, 1.0) * (-1.0) ** k
+    dx = x[:, None] - x[None, :]
+    D = np.outer(c, 1.0 / c) / (dx + np.eye(n + 1))
+    D -= np.diag(D.sum(axis=1))
+    th = np.pi * k / n
+    w = np.zeros(n + 1)
+    for j in range(n + 1):
+        acc = 1.0 + sum(2.0 / (1.0 - 4.0 * m * m) * np.cos(2 * m * th[j]) for m in range(1, (n - 1) // 2 + 1))
+        if n % 2 == 0:
+            acc += np.cos(n * th[j]) / (1.0 - n * n)
+        w[j] = acc * 2.0 / n * (0.5 if j in (0, n) else 1.0)
+    # xi = (1 - x) / 2 maps x = 1 -> 0: d/dxi = -2 d/dx, weights halve (sum 1)
+    return -2.0 * D, w / 2.0
+
+
+_D_TREAD, _W_TREAD = _chebyshev(N_TREAD)
+
+
+def string_rates(lead, nodes, v_c, V, a, sigma_s):
+    """Rates of a tread string of length 2a: (d lead/dt, d nodes/dt), and the integral I = sigma_s
+    (lead + trailing) + int e dxi, so the force is c I. lead: the leading edge's deflection (held at
+    0 when sigma_s is None: a brush); nodes (N_TREAD,) behind it."""
+    aV = jnp.abs(V)
+    L = 2.0 * a
+    D, w = jnp.asarray(_D_TREAD), jnp.asarray(_W_TREAD)
+    full = jnp.concatenate([jnp.reshape(lead, (1,)), nodes])
+    d_nodes = v_c - aV * (D[1:] @ full) / L
+    integral = L * (w @ full)
+    if sigma_s is None:
+        return jnp.zeros_like(lead), d_nodes, integral, L * (w[1:] @ d_nodes)
+    d_lead = v_c - aV * lead / sigma_s
+    d_int = sigma_s * (d_lead + d_nodes[-1]) + L * (w @ jnp.concatenate([jnp.reshape(d_lead, (1,)), d_nodes]))
+    return d_lead, d_nodes, integral + sigma_s * (lead + nodes[-1]), d_int
+
+
 def _tread_rate(k, c, k_f, e, v_cy, V):
     """de/dt of a tread spring k || damper c whose road end slides with the linear brush law
     F = -k_f V_sy / |V|: de/dt = (V_cy - |V| e k / k_f) / (1 + |V| c / k_f)."""
@@ -126,10 +189,12 @@ def _tread_rate(k, c, k_f, e, v_cy, V):
 
 
 class RigidRing(eqx.Module):
-    """The rigid-ring tire; lateral = "ring" (Chae belt DOFs) or "reduced" (k_l || C_l, sigma)."""
+    """The rigid-ring tire; lateral = "ring" (Chae belt DOFs) or "reduced" (k_l || C_l, sigma);
+    contact = "string" (the tread strings through the patch) or "lag" (first-order slip lags)."""
 
     params: RigidRingParams
     lateral: str = eqx.field(static=True, default="ring")
+    contact: str = eqx.field(static=True, default=CONTACT)
 
     def forces(self, t, y, drive: Drive) -> dict:
         """Every force of the model at (t, y): contact F_x, F_y, F_z, M_z (road on tire, ISO), the
@@ -153,32 +218,51 @@ class RigidRing(eqx.Module):
         msth = -p.k_btheta * (thb - tha) - p.C_btheta * (vthb - vtha)
         V = drive.V
         alpha = slip_angle(drive, t)
+        string = self.contact == "string"
         # longitudinal tread (the road moves backwards at V under the fixed axle)
         k_cx = p.k_k / p.a
         c_vlow = p.damp_vlow * k_cx * jnp.clip(1.0 - jnp.abs(V) / VXLOW, 0.0, 1.0)
         v_sx = V * jnp.cos(alpha) + vxb - p.r_e * vthb
-        u_dot = -v_sx - jnp.abs(V) * u / p.a
-        fx = contact * (k_cx * u + c_vlow * u_dot) - fz * slope  # + the normal force's share on a slope
+        un, en = y[jnp.asarray(U_NODES)], y[jnp.asarray(E_NODES)]
+        if string:  # a brush: k_k / (2 a^2) per length, so F = k_k kappa steady and k_cx u at V = 0
+            u_dot, un_dot, integ, d_integ = string_rates(u, un, -v_sx, V, p.a, None)
+            fx_t = p.k_k / (2.0 * p.a**2) * integ + c_vlow * d_integ / (2.0 * p.a)
+        else:
+            u_dot = -v_sx - jnp.abs(V) * u / p.a
+            un_dot = jnp.zeros_like(un)
+            fx_t = k_cx * u + c_vlow * u_dot
+        fx = contact * fx_t - fz * slope  # + the normal force's share on a slope
         # lateral
         v_road = V * jnp.sin(alpha)
         if self.lateral == "ring":
             v_cy = v_road + vyb + rl * vgb
-            e_dot = _tread_rate(p.k_cy, p.C_cy, p.k_f, e, v_cy, V)
-            fy = -contact * (p.k_cy * e + p.C_cy * e_dot)
+            k_t, c_t = p.k_cy, p.C_cy
+        else:
+            v_cy = v_road + vya
+            k_t, c_t = p.k_l, p.C_l
+        if string:  # free string sigma_c - a ahead of the patch (sigma_c = k_f / k_t), then the patch
+            sig_s = jnp.maximum(p.k_f / k_t - p.a, SIGMA_S_MIN * p.a)
+            c_len = p.k_f / (2.0 * (sig_s + p.a) ** 2)
+            e_dot, en_dot, integ, d_integ = string_rates(e, en, v_cy, V, p.a, sig_s)
+            k_st = 2.0 * c_len * (sig_s + p.a)  # its static stiffness (k_t unless sigma_c < 1.1 a)
+            fy = -contact * (c_len * integ + c_t * d_integ * c_len / k_st)
+        else:
+            e_dot = _tread_rate(k_t, c_t, p.k_f, e, v_cy, V)
+            en_dot = jnp.zeros_like(en)
+            fy = -contact * (k_t * e + c_t * e_dot)
+        if self.lateral == "ring":
             fsy = -p.k_by * (yb - ya) - p.C_by * (vyb - vya)
             msg = -p.k_bgamma * (gb - ga) - p.C_bgamma * (vgb - vga)
             rim_y = -fsy
         else:
-            v_cy = v_road + vya
-            e_dot = _tread_rate(p.k_l, p.C_l, p.k_f, e, v_cy, V)
-            fy = -contact * (p.k_l * e + p.C_l * e_dot)
             fsy = msg = jnp.zeros_like(fy)
             rim_y = fy
         # M_z from E10's steady curve at the slip the force stands for (alpha'_SAE = F_y_ISO / k_f; linear
-        # k_m alpha' without a curve); an output only: the ring has no yaw DOF
+        # k_m alpha', the pneumatic trail k_m/k_f, without one); an output only: the ring has no yaw DOF
         mz = -jnp.interp(fy / p.k_f, p.mz_alpha, p.mz_value)
         return {"F_x": fx, "F_y": fy, "F_z": fz, "M_z": mz, "F_sx": fsx, "F_sz": fsz, "M_stheta": msth,
                 "F_sy": fsy, "M_sgamma": msg, "u_dot": u_dot, "e_dot": e_dot, "r_l": rl, "rho": rho,
+                "tread_dot": jnp.concatenate([jnp.stack([u_dot, e_dot]), un_dot, en_dot]),
                 "z_road": zr, "alpha_iso": alpha, "contact": contact,
                 "tire_on_rim_x": -fsx, "tire_on_rim_z": -fsz, "tire_on_rim_y": rim_y}
 
@@ -203,10 +287,10 @@ class RigidRing(eqx.Module):
         acc = jnp.concatenate([acc_a, acc_b, lat_a, lat_b]) * drive.free  # the order of q
         if self.lateral != "ring":
             acc = acc.at[8:10].set(0.0)
-        return jnp.concatenate([y[N_Q:2 * N_Q], acc, jnp.stack([f["u_dot"], f["e_dot"]])])
+        return jnp.concatenate([y[N_Q:2 * N_Q], acc, f["tread_dot"]])
 
     def outputs(self, ts, ys, drive: Drive) -> dict:
-        """Forces at saved samples: ts (N,), ys (N, 22) -> dict of (N,) arrays."""
+        """Forces at saved samples: ts (N,), ys (N, N_STATE) -> dict of (N,) arrays."""
         return _outputs(self, _f64(ts), _f64(ys), drive)
 
 
@@ -217,7 +301,7 @@ def _outputs(model, ts, ys, drive):
 
 def simulate(model: RigidRing, drive: Drive, y0, t1, ts, rtol=1e-7, atol=1e-9, max_steps=200_000, dt0=1e-5,
              dtmax=None):
-    """Integrate from t = 0 to t1, saving at ts (N,). Returns ys (N, 22). dtmax: the largest step (s;
+    """Integrate from t = 0 to t1, saving at ts (N,). Returns ys (N, N_STATE). dtmax: the largest step (s;
     an input that starts later, like a cleat, is not stepped over from a quiet start). Jit-compiled
     per (lateral, shapes); differentiable in model.params and drive."""
     return _simulate(model, drive, _f64(y0), _f64(t1), _f64(ts), rtol, atol, max_steps, dt0, dtmax)
@@ -234,7 +318,7 @@ def _simulate(model, drive, y0, t1, ts, rtol, atol, max_steps, dt0, dtmax=None):
 
 
 def linearize(model: RigidRing, drive: Drive, y_eq, t=0.0):
-    """Jacobian d(dy/dt)/dy (22, 22) at y_eq (forward-mode AD)."""
+    """Jacobian d(dy/dt)/dy (N_STATE, N_STATE) at y_eq (forward-mode AD)."""
     return _linearize(model, drive, _f64(y_eq), _f64(t))
 
 
@@ -245,12 +329,14 @@ def _linearize(model, drive, y_eq, t):
 
 def modes(jac, coords, slip=()):
     """Modes of the linearized system restricted to coordinates `coords` (names of q), their
-    velocities and the slip states `slip` ("u", "e"). Returns (f_n Hz, zeta) of the oscillatory
+    velocities and the slip states `slip` ("u", "e": each with its string's nodes; the states the
+    model's contact leaves constant add zero eigenvalues, not oscillatory modes). Returns (f_n Hz, zeta) of the oscillatory
     modes, sorted by frequency, as numpy arrays."""
     import numpy as np
 
     iq = [IDX[c] for c in coords]
-    idx = iq + [i + N_Q for i in iq] + [IDX[s] for s in slip]
+    nodes = {"u": U_NODES, "e": E_NODES}
+    idx = iq + [i + N_Q for i in iq] + [j for s in slip for j in (IDX[s],) + nodes[s]]
     lam = np.linalg.eigvals(np.asarray(jac)[np.ix_(idx, idx)])
     osc = lam[lam.imag > 1e-9]
     wn = np.abs(osc)

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from .linear import modes as _modes
-from .model import VXLOW
+from .model import _D_TREAD, _W_TREAD, N_TREAD, VXLOW
 from .params import RigidRingParams
 
 __all__ = ["vertical_modes", "belt_vertical_mode", "fore_aft_modes", "lateral_modes", "string_step_s63"]
@@ -33,11 +33,13 @@ def belt_vertical_mode(d):
     return math.sqrt(k / m) / (2 * math.pi), c / (2 * math.sqrt(k * m))
 
 
-def fore_aft_modes(d, speed, k_bx=None, C_bx=None, C_btheta=None):
+def fore_aft_modes(d, speed, k_bx=None, C_bx=None, C_btheta=None, contact="string"):
     """Drum-cleat linearization of the fore-aft / wind-up motion (rim x, z locked, rim spin free,
-    rolling at `speed`): belt x_b, theta_b, rim theta_a and the tread's slip state u with
-    a du/dt + V u = -a (x_b' - r_e theta_b'), F_x = k_cx u (+ the low-speed damper below VXLOW).
-    Returns [(f, zeta, x_b share of the mode's kinetic energy)]; k_bx, C_bx, C_btheta override."""
+    rolling at `speed`): belt x_b, theta_b, rim theta_a and the tread's longitudinal slip states, as
+    `model.RigidRing` with that contact: "string" (the brush's N_TREAD nodes through the patch) or
+    "lag" (a du/dt + V u = -a (x_b' - r_e theta_b'), F_x = k_cx u), each with the low-speed damper
+    below VXLOW. Returns [(f, zeta, x_b share of the mode's kinetic energy)]; k_bx, C_bx, C_btheta
+    override."""
     t = d.tire
     kbx = d.k_bx if k_bx is None else k_bx
     cbx = d.C_bx if C_bx is None else C_bx
@@ -47,15 +49,29 @@ def fore_aft_modes(d, speed, k_bx=None, C_bx=None, C_btheta=None):
     damp_vlow = inspect.signature(RigidRingParams.from_derived).parameters["damp_vlow"].default
     cv = damp_vlow * kcx * max(0.0, 1.0 - abs(speed) / VXLOW)  # the low-speed tread damper, as the model
     m, Ib, Ia = t.m_b_kg, t.I_by_kgm2, t.I_ay_kgm2
-    # state [x_b, th_b, th_a, x_b', th_b', th_a', u]; u' = -(x_b' - r_e th_b') - V u / a
-    A = np.zeros((7, 7))
+    # state [x_b, th_b, th_a, x_b', th_b', th_a', slip states]; each slip state's rate carries
+    # -(x_b' - r_e th_b') (the belt's slip velocity) plus its own transport or relaxation
+    ns = N_TREAD if contact == "string" else 1
+    n = 6 + ns
+    A = np.zeros((n, n))
     A[0, 3] = A[1, 4] = A[2, 5] = 1.0
-    du = np.zeros(7)
-    du[3], du[4], du[6] = -1.0, re, -abs(speed) / a
-    A[6] = du
-    fx = kcx * np.eye(7)[6] + cv * du  # F_x as a row over the state
-    A[3] = (-kbx * np.eye(7)[0] - cbx * np.eye(7)[3] + fx) / m
-    msth = -kbt * (np.eye(7)[1] - np.eye(7)[2]) - cbt * (np.eye(7)[4] - np.eye(7)[5])
+    drive = np.zeros(n)
+    drive[3], drive[4] = -1.0, re
+    if contact == "string":
+        L = 2.0 * a
+        rel = -abs(speed) * _D_TREAD[1:, 1:] / L  # the leading edge (node 0) stays undeflected
+        A[6:] = drive
+        A[6:, 6:] = rel
+        w = _W_TREAD[1:]
+        fx = np.zeros(n)
+        fx[6:] = d.k_k / (2.0 * a * a) * L * w
+        fx += cv * (w @ A[6:])
+    else:
+        A[6] = drive
+        A[6, 6] = -abs(speed) / a
+        fx = kcx * np.eye(n)[6] + cv * A[6]  # F_x as a row over the state
+    A[3] = (-kbx * np.eye(n)[0] - cbx * np.eye(n)[3] + fx) / m
+    msth = -kbt * (np.eye(n)[1] - np.eye(n)[2]) - cbt * (np.eye(n)[4] - np.eye(n)[5])
     A[4] = (msth - rb * fx) / Ib
     A[5] = -msth / Ia
     lam, vec = np.linalg.eig(A)

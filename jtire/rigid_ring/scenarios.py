@@ -13,12 +13,23 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from .. import enveloping
+from .. import enveloping, spectra
 from .. import signals as sig
-from .. import spectra
 from ..errors import ConfigError, SimulationError
 from ..physics.drum import cleat_half_chord
-from .model import IDX, N_STATE, Drive, RigidRing, linearize, modes, simulate
+from .model import (
+    CONTACT,
+    CONTACTS,
+    E_NODES,
+    IDX,
+    N_STATE,
+    U_NODES,
+    Drive,
+    RigidRing,
+    linearize,
+    modes,
+    simulate,
+)
 from .params import Derived, RigidRingParams
 
 
@@ -31,11 +42,13 @@ class ScenarioResult:
     info: dict
 
 
-def _model(d: Derived, lateral: str, group: str, what: str) -> RigidRing:
+def _model(d: Derived, lateral: str, group: str, what: str, contact: str = CONTACT) -> RigidRing:
     if lateral not in ("ring", "reduced"):
         raise ConfigError(f"lateral = {lateral!r}: must be 'ring' or 'reduced'")
+    if contact not in CONTACTS:
+        raise ConfigError(f"contact = {contact!r}: must be one of {', '.join(map(repr, CONTACTS))}")
     d.require(group, what)
-    return RigidRing(RigidRingParams.from_derived(d), lateral)
+    return RigidRing(RigidRingParams.from_derived(d), lateral, contact)
 
 
 def vertical_equilibrium(d: Derived, load_N: float, gravity: float = 0.0, z_road: float = 0.0) -> dict:
@@ -49,12 +62,16 @@ def vertical_equilibrium(d: Derived, load_N: float, gravity: float = 0.0, z_road
 
 
 def _state(**kw):
+    """The state vector from named positions, velocities (v_<name>) and tread deflections u, e (a
+    uniform deflection: the string's nodes take it too, the static state of either contact)."""
     y = np.zeros(N_STATE)
     for k, v in kw.items():
         if k.startswith("v_"):
             y[IDX[k[2:]] + 10] = v
         else:
             y[IDX[k]] = v
+            if k in ("u", "e"):
+                y[list(U_NODES if k == "u" else E_NODES)] = v
     return jnp.asarray(y)
 
 
@@ -125,14 +142,14 @@ def drop_test(d: Derived, drop_height=0.02, duration=0.4, gravity=0.0, n_save=40
 
 
 def drum_cleat(d: Derived, speed=50 / 3.6, cleat_diameter=0.2, cleat_height=0.02, lead_s=0.01, record_s=0.3,
-               sample_rate=4000.0, f_band=(20.0, 200.0)):
+               sample_rate=4000.0, f_band=(20.0, 200.0), contact=CONTACT):
     """Rim x and z locked, spin free, rolling at `speed` over a round cleat: through E03's tandem cam
     when the condition has one (d.ellips, the effective road of `jtire.enveloping`: the force
     waveform and its peak-to-peak are comparable), else a point contact on the cleat's profile
     (frequencies and decay comparable, the waveform not). The cleat reaches the tire `lead_s` after
     the start. Reduces the spindle F_z and F_x after the cleat (jtire.spectra.first_mode:
     padded-spectrum peak and a damped-mode fit)."""
-    m = _model(d, "reduced", "inplane", "drum-cleat")
+    m = _model(d, "reduced", "inplane", "drum-cleat", contact)
     fz = d.load_N
     eq = vertical_equilibrium(d, fz)
     r_c = cleat_diameter / 2
@@ -167,7 +184,7 @@ def drum_cleat(d: Derived, speed=50 / 3.6, cleat_diameter=0.2, cleat_height=0.02
                "contact_force_z_N": out["F_z"]}
     return ScenarioResult("drum_cleat", q, implied, signals,
                           {"speed_m_s": speed, "cleat_diameter_m": cleat_diameter, "cleat_height_m": cleat_height,
-                           "ellips": d.ellips, "enveloping": "none (point contact follows the cleat profile)"
+                           "ellips": d.ellips, "contact": contact, "enveloping": "none (point contact follows the cleat profile)"
                            if d.ellips is None else
                            "tandem cam (l_s, a_e, b_e, c_e) = ({:.4g}, {:.4g}, {:.4g}, {:.4g}) from E03".format(*d.ellips),
                            "t_free_s": t_free, "t_touch_s": _first_rise(ts, out["z_road"]),
@@ -221,13 +238,13 @@ def lateral_release(d: Derived, force=5e3, lateral="reduced", duration=0.5, n_sa
 
 
 def slip_step(d: Derived, speed=15.0, alpha_deg=2.0, lateral="reduced", t_step=0.01, t_ramp=0.005,
-              distance_sigmas=8.0, n_save=4001):
+              distance_sigmas=8.0, n_save=4001, contact=CONTACT):
     """Rolling at `speed` under the condition's load (rim z free with the load force, y/camber/steer
     held), slip angle stepped 0 -> alpha_deg (SAE) by a half-cosine over t_ramp. Distance s = V t
     counted from the middle of the ramp. Returns steady F_y, M_z (SAE), the distance to 63 % of the
     steady F_y, the overshoot, and the implied values (k_f sin a, k_m sin a, sigma)."""
     grp = "lateral_ring" if lateral == "ring" else "lateral_reduced"
-    m = _model(d, lateral, grp, "slip-angle step")
+    m = _model(d, lateral, grp, "slip-angle step", contact)
     d.require("inplane", "slip-angle step")
     eq = vertical_equilibrium(d, d.load_N)
     a_sae = math.radians(alpha_deg)
@@ -251,12 +268,14 @@ def slip_step(d: Derived, speed=15.0, alpha_deg=2.0, lateral="reduced", t_step=0
         s63 = float(np.interp(0.632, [frac[i - 1], frac[i]], [s[i - 1], s[i]]))
     q = {"F_y_steady_SAE_N": fy_ss, "M_z_steady_SAE_Nm": mz_ss, "s63_m": s63,
          "overshoot": float(np.max(frac[s > 0]) - 1.0), "F_y_tail_drift_rel": float(np.ptp(fy_sae[tail]) / abs(fy_ss))}
-    # reduced model: the force k_l e + C_l de/dt obeys dF/dt = k_l (V_cy - V F / k_f) exactly, a
-    # first-order lag over the distance sigma = k_f / k_l, plus a small jump C_l V_cy at the step
-    # (so s63 comes out slightly below sigma); the ring adds its belt masses (quasi-static: sigma)
+    # reduced model with the lag: the force k_l e + C_l de/dt obeys dF/dt = k_l (V_cy - V F / k_f)
+    # exactly, a first-order lag over the distance sigma = k_f / k_l, plus a small jump C_l V_cy at
+    # the step (so s63 comes out slightly below sigma); with the string, Pacejka's stretched string
+    # (s63 ~ 0.8 sigma, modes.string_step_s63); the ring adds its belt masses
     implied = {"F_y_steady_SAE_N": -d.k_f * math.sin(a_sae), "M_z_steady_SAE_Nm": d.k_m * math.sin(a_sae),
                "sigma_m": d.sigma}
     signals = {"time_s": ts, "distance_m": s, "F_y_SAE_N": fy_sae, "M_z_SAE_Nm": mz_sae,
                "slip_angle_SAE_deg": -np.degrees(out["alpha_iso"])}
     return ScenarioResult("slip_step", q, implied, signals, {"speed_m_s": speed, "alpha_deg": alpha_deg,
-                                                             "lateral": lateral, "t_step_s": t_step})
+                                                             "lateral": lateral, "contact": contact,
+                                                             "t_step_s": t_step})
