@@ -17,9 +17,10 @@ def with_row(char, row, **q):
     return Characterization(char.tire, tuple(new if r is row else r for r in char.rows)), new
 
 
-def explain(char, row, shell, ring, char_dir=None, shell_signals=None):
+def explain(char, row, shell, ring, char_dir=None, shell_signals=None, ring_signals=None):
     rows = validation.compare(shell, ring)
-    return {d.metric: d for d in dg.explain(char, row.load_N, row.pressure_Pa, rows, char_dir, shell_signals)}
+    return {d.metric: d for d in dg.explain(char, row.load_N, row.pressure_Pa, rows, char_dir, shell_signals,
+                                            ring_signals)}
 
 
 def write_case(root, experiment, row, result, signals=None):

@@ -115,7 +115,8 @@ def _validate(plan, out, say) -> tuple:
         if error is not None:
             failed.append(f"validation slip step at {kg:g} kg, {psi:g} psi: {error}")
             text.append(f"The shell model's slip step failed here ({error}); rerun the command to retry it.\n")
-        notes = diagnose(char, c["load_N"], c["pressure_Pa"], rows, char_dir=out, shell_signals=s_sig)
+        notes = diagnose(char, c["load_N"], c["pressure_Pa"], rows, char_dir=out, shell_signals=s_sig,
+                         ring_signals=r_sig)
         if notes:
             text += ["Causes of the disagreements beyond tolerance:\n", "\n".join(notes) + "\n"]
         written.append(validation.validation_figure(s_sig, r_sig, out / f"validation_{kg:g}kg_{psi:g}psi.png",

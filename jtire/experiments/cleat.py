@@ -332,7 +332,8 @@ class DrumCleat(Experiment):
             "sample_rate_Hz": self.sample_rate, "f_band_Hz": list(band),
             "spectrum": sp.as_dict(), "spectrum_contact_force": sp_c.as_dict()} | env_info
         sig = {"time_s": ts - t_touch, "axle_force_N": f_axle, "axle_force_x_N": s["tire_on_rim"][:, 0],
-               "contact_force_z_N": fc, "belt_disp_z_m": bz, "spin_rad_s": spin}
+               "contact_force_z_N": fc, "contact_force_x_N": s["contact_force"][:, 0], "belt_disp_z_m": bz,
+               "spin_rad_s": spin}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks, info=info)
 
 

@@ -2,7 +2,7 @@
 bullet per FAILed comparison row, naming the cause with the numbers that show it, or saying plainly
 that the cause was not established.
 
-`diagnose(char, load_N, pressure_Pa, rows, char_dir=None, shell_signals=None)` gives the bullets,
+`diagnose(char, load_N, pressure_Pa, rows, char_dir=None, shell_signals=None, ring_signals=None)` gives the bullets,
 `explain(...)` (same arguments) the Diagnosis records behind them (metric, state, text). Both work from
   * the comparison rows (`validation.compare`: the shell's and the ring's value of every metric),
   * the condition's table row and what `params.derive` makes of it, put through the ring's own
@@ -89,12 +89,13 @@ class Diagnosis:
         return f"- {self.metric}{rel}: {text}"
 
 
-def explain(char, load_N, pressure_Pa, rows, char_dir=None, shell_signals=None) -> list:
+def explain(char, load_N, pressure_Pa, rows, char_dir=None, shell_signals=None, ring_signals=None) -> list:
     """A Diagnosis for every FAIL row of `rows` (validation.compare's Comparison list), in their
     order, at the condition (load_N, pressure_Pa) of the characterization `char` (table.
     read_characterization). char_dir: the characterization folder, whose case folders add the
     shell's own records (None: the table alone). shell_signals: the shell's validation signals
-    ({"step_5": (distance, F_y SAE), ...}, as validate.validate returns them), optional."""
+    ({"step_5": (distance, F_y SAE), ...}, as validate.validate returns them), optional; ring_signals:
+    the ring's (validation.ring_signals), optional."""
     fails = [c for c in rows if c.verdict == "FAIL"]
     if not fails:
         return []
@@ -102,7 +103,7 @@ def explain(char, load_N, pressure_Pa, rows, char_dir=None, shell_signals=None) 
     if row is None:
         return [Diagnosis(c.metric, c.rel_diff, NONE, "no table row at this condition") for c in fails]
     cx = _Context(char, row, derive(row, char.tire), {c.metric: c for c in rows}, char_dir, shell_signals or {},
-                  load_N, pressure_Pa)
+                  load_N, pressure_Pa, ring_signals=ring_signals or {})
     out = []
     for c in fails:
         check = _check_for(c.metric)
@@ -118,7 +119,7 @@ def explain(char, load_N, pressure_Pa, rows, char_dir=None, shell_signals=None) 
     return out
 
 
-def diagnose(char, load_N, pressure_Pa, rows, char_dir=None, shell_signals=None) -> list:
+def diagnose(char, load_N, pressure_Pa, rows, char_dir=None, shell_signals=None, ring_signals=None) -> list:
     """One markdown bullet per FAIL row (see explain): "- metric +x %: cause, with its numbers", or
     "- metric +x %: cause not established: what was checked, with its numbers"."""
-    return [d.bullet() for d in explain(char, load_N, pressure_Pa, rows, char_dir, shell_signals)]
+    return [d.bullet() for d in explain(char, load_N, pressure_Pa, rows, char_dir, shell_signals, ring_signals)]

@@ -32,6 +32,7 @@ class _Context:
     shell_signals: dict
     load_N: float
     pressure_Pa: float
+    ring_signals: dict = dataclasses.field(default_factory=dict)
     _cache: dict = dataclasses.field(default_factory=dict)
 
     def case(self, experiment):

@@ -181,7 +181,7 @@ def drum_cleat(d: Derived, speed=50 / 3.6, cleat_diameter=0.2, cleat_height=0.02
                "belt_vertical_zeta": (d.C_bz + d.C_vr) / (2 * math.sqrt((d.k_bz + d.k_vr) * d.tire.m_b_kg)),
                "f_dv_measured_Hz": d.f_dv}
     signals = {"time_s": ts, "spindle_F_z_N": fz_sp, "spindle_F_x_N": fx_sp, "road_z_m": out["z_road"],
-               "contact_force_z_N": out["F_z"]}
+               "contact_force_z_N": out["F_z"], "contact_force_x_N": out["F_x"]}
     return ScenarioResult("drum_cleat", q, implied, signals,
                           {"speed_m_s": speed, "cleat_diameter_m": cleat_diameter, "cleat_height_m": cleat_height,
                            "ellips": d.ellips, "contact": contact, "enveloping": "none (point contact follows the cleat profile)"

@@ -131,6 +131,8 @@ def ring_signals(results: dict) -> dict:
         s = results["drum"].signals
         info = results["drum"].info  # time from the cleat's crest under the rim centre
         out["drum"] = (s["time_s"] - info.get("t_centre_s", info.get("t_touch_s", 0.0)), s["spindle_F_z_N"])
+        out["drum_contact"] = (out["drum"][0], s["contact_force_z_N"])  # the diagnosis's, not panels
+        out["drum_contact_x"] = (out["drum"][0], s["contact_force_x_N"])
     if "lateral" in results:
         s = results["lateral"].signals
         out["lateral"] = (s["time_s"], s["rim_y_m"])
