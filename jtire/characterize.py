@@ -209,7 +209,10 @@ def tire_info(plan: Plan):
                     tire_mass_kg=s.masses.tire, rim_mass_kg=s.masses.rim,
                     I_by_kgm2=decay_inertia(s, own, "belt_Iy_kgm2", choice.get("inplane_rotation", "model")),
                     I_bx_kgm2=decay_inertia(s, own, "belt_Ix_kgm2", choice.get("sidewall_camber", "model")),
-                    I_ay_kgm2=s.masses.rim_Iy, I_ax_kgm2=s.masses.rim_Ixz, unloaded_radius_m=g.outer_radius,
+                    # the ring's rim body carries the tire's non-belt part (sidewalls, beads) in its spin and
+                    # camber inertia as m_a = m_tot - m_b carries it in mass: the ring then spins like the shell
+                    I_ay_kgm2=s.masses.rim_Iy + own["nonbelt_Iy_kgm2"],
+                    I_ax_kgm2=s.masses.rim_Ixz + own["nonbelt_Ix_kgm2"], unloaded_radius_m=g.outer_radius,
                     width_m=g.section_width, rim_radius_m=g.rim_radius, rim_width_m=g.rim_width,
                     aspect_ratio=g.section_height / g.section_width, rated_load_N=plan.rated["load_N"],
                     rated_pressure_Pa=plan.rated["pressure_Pa"])

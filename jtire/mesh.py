@@ -143,16 +143,20 @@ class Mesh:
         return np.nonzero(self.tread_depth > 0)[0]
 
     def masses(self) -> dict:
-        """Tire, belt and rim masses (kg) and belt inertias (kg m^2), for reporting."""
+        """Tire, belt and rim masses (kg) and the belt's and the rest of the tire's inertias (kg m^2:
+        sidewalls and beads, about the axle y and about x), for reporting and the rigid ring."""
         m = self.node_mass
         x, y, z = self.nodes[..., 0], self.nodes[..., 1], self.nodes[..., 2]
         belt = m * self.belt_mask[None, :]
+        rest = m - belt
         return {
             "tire_kg": float(m.sum()),
             "belt_kg": float(belt.sum()),
             "rim_kg": float(self.rim_mass - m[:, [0, -1]].sum()),
             "belt_Iy_kgm2": float((belt * (x**2 + z**2)).sum()),
             "belt_Ix_kgm2": float((belt * (y**2 + z**2)).sum()),
+            "nonbelt_Iy_kgm2": float((rest * (x**2 + z**2)).sum()),
+            "nonbelt_Ix_kgm2": float((rest * (y**2 + z**2)).sum()),
         }
 
 

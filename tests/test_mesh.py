@@ -20,6 +20,19 @@ def test_masses_match_the_data(spec):
     assert m["belt_Ix_kgm2"] == pytest.approx(10.491, rel=0.2)
 
 
+def test_non_belt_inertia_is_the_rest_of_the_tire(spec):
+    mesh = build_mesh(spec.geometry, spec.masses, spec.n_theta, spec.n_side, spec.n_crown)
+    m = mesh.masses()
+    x, z = mesh.nodes[..., 0], mesh.nodes[..., 2]
+    # a partition of the tire's nodes: belt + rest = the whole tire's spin inertia, to rounding
+    assert m["belt_Iy_kgm2"] + m["nonbelt_Iy_kgm2"] == pytest.approx(float((mesh.node_mass * (x**2 + z**2)).sum()),
+                                                                        rel=1e-12)
+    # the rest (9.33 kg of sidewalls and beads) lies between the rim and the tread: m r_rim^2 <= I <= m R0^2
+    rest = m["tire_kg"] - m["belt_kg"]
+    g = spec.geometry
+    assert rest * g.rim_radius**2 < m["nonbelt_Iy_kgm2"] < rest * g.outer_radius**2
+
+
 def test_section_is_symmetric_and_has_every_part(spec):
     y, r, part = section_profile(spec.geometry, spec.n_side, spec.n_crown)
     np.testing.assert_allclose(y, -y[::-1], atol=1e-12)

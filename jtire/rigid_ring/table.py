@@ -124,8 +124,10 @@ def all_keys() -> tuple:
 
 @dataclasses.dataclass(frozen=True)
 class TireInfo:
-    """Reference masses, inertias and dimensions (SI). I_ay, I_ax: rim (plus bead) inertias for
-    the rim's spin and camber DOFs (not given by the study: the tire config's rim values)."""
+    """Reference masses, inertias and dimensions (SI). I_ay, I_ax: the ring's rim body's spin and
+    camber inertias: from a characterization, the rim's (tire config) plus the tire's non-belt part
+    (sidewalls and beads, from the mesh), as its mass m_tot - m_b carries them; from_reference,
+    the rim's alone (the study gives neither)."""
 
     name: str
     m_b_kg: float
