@@ -18,11 +18,10 @@ e_1 relaxes over the free string, sigma_s de_1/dt + |V| e_1 = sigma_s v_c, and t
 c (sigma_s (e_1 + e(2a)) + int e dxi). Longitudinally sigma_s = 0 (a brush); laterally sigma_s =
 sigma_c - a. With c = k_f / (2 (sigma_s + a)^2) it has the lag's steady force and static stiffness
 k_f / (sigma_s + a); what differs is its response to slip that varies within a patch transit
-(2a / |V|): the lag over-damps it (at 60 Hz and 13.9 m/s five times the string's dissipation,
-docs/rigid-ring.md §5). Nodes: Chebyshev-Gauss-Lobatto behind the leading edge (spectral: with 6
-nodes the continuous string's transfer function to 0.1 % of its steady value up to omega 2a/|V| = 6,
-1 % up to 10). Linear, no
-sliding, like the lag; |V| is taken as the speed in either direction.
+(2a / |V|), which the lag over-damps (docs/rigid-ring.md, "Why a string, not the lag"). Nodes:
+Chebyshev-Gauss-Lobatto behind the leading edge (spectral; tests/test_rigid_ring_contact.py checks
+them against the continuous string). Linear, no sliding, like the lag; |V| is taken as the speed in
+either direction.
 
 In-plane (Zegelaar & Pacejka; §4): belt and rim joined by the sidewall springs/dampers
 (k_bx, C_bx; k_bz, C_bz; k_btheta, C_btheta); the belt stands on the residual spring
@@ -258,7 +257,7 @@ class RigidRing(eqx.Module):
             fsy = msg = jnp.zeros_like(fy)
             rim_y = fy
         # M_z from E10's steady curve at the slip the force stands for (alpha'_SAE = F_y_ISO / k_f; linear
-        # k_m alpha', the pneumatic trail k_m/k_f, without one); an output only: the ring has no yaw DOF
+        # k_m alpha' without a curve); an output only: the ring has no yaw DOF
         mz = -jnp.interp(fy / p.k_f, p.mz_alpha, p.mz_value)
         return {"F_x": fx, "F_y": fy, "F_z": fz, "M_z": mz, "F_sx": fsx, "F_sz": fsz, "M_stheta": msth,
                 "F_sy": fsy, "M_sgamma": msg, "u_dot": u_dot, "e_dot": e_dot, "r_l": rl, "rho": rho,
@@ -330,8 +329,8 @@ def _linearize(model, drive, y_eq, t):
 def modes(jac, coords, slip=()):
     """Modes of the linearized system restricted to coordinates `coords` (names of q), their
     velocities and the slip states `slip` ("u", "e": each with its string's nodes; the states the
-    model's contact leaves constant add zero eigenvalues, not oscillatory modes). Returns (f_n Hz, zeta) of the oscillatory
-    modes, sorted by frequency, as numpy arrays."""
+    model's contact leaves constant add zero eigenvalues, not oscillatory modes). Returns (f_n Hz,
+    zeta) of the oscillatory modes, sorted by frequency, as numpy arrays."""
     import numpy as np
 
     iq = [IDX[c] for c in coords]

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from .linear import modes as _modes
-from .model import _D_TREAD, _W_TREAD, N_TREAD, VXLOW
+from .model import _D_TREAD, _W_TREAD, CONTACT, N_TREAD, VXLOW
 from .params import RigidRingParams
 
 __all__ = ["vertical_modes", "belt_vertical_mode", "fore_aft_modes", "lateral_modes", "string_step_s63"]
@@ -33,7 +33,7 @@ def belt_vertical_mode(d):
     return math.sqrt(k / m) / (2 * math.pi), c / (2 * math.sqrt(k * m))
 
 
-def fore_aft_modes(d, speed, k_bx=None, C_bx=None, C_btheta=None, contact="string"):
+def fore_aft_modes(d, speed, k_bx=None, C_bx=None, C_btheta=None, contact=CONTACT):
     """Drum-cleat linearization of the fore-aft / wind-up motion (rim x, z locked, rim spin free,
     rolling at `speed`): belt x_b, theta_b, rim theta_a and the tread's longitudinal slip states, as
     `model.RigidRing` with that contact: "string" (the brush's N_TREAD nodes through the patch) or
