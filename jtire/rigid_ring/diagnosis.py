@@ -37,13 +37,29 @@ import dataclasses
 import numpy as np
 
 from .diagnosis_base import FULL, NONE, PARTIAL, _Context, _p  # noqa: F401  (FULL, PARTIAL: the states)
-from .diagnosis_inplane import (_belt_mode, _drop_bounce_f, _drop_peak, _drop_static, _drop_zeta,
-                                _drum_fore_aft_f, _drum_fore_aft_zeta, _drum_peak_to_peak, _drum_vertical_f,
-                                _drum_vertical_zeta)
+from .diagnosis_drop import (
+    _belt_mode,
+    _drop_bounce_f,
+    _drop_peak,
+    _drop_static,
+    _drop_zeta,
+)
+from .diagnosis_drum import (
+    _drum_fore_aft_f,
+    _drum_fore_aft_zeta,
+    _drum_peak_to_peak,
+    _drum_vertical_f,
+    _drum_vertical_zeta,
+)
 from .diagnosis_lateral import _lateral_f, _lateral_zeta, _step_force, _step_s63
-from .modes import belt_vertical_mode, fore_aft_modes, lateral_modes, string_step_s63, vertical_modes  # noqa: F401
+from .modes import (  # noqa: F401
+    belt_vertical_mode,
+    fore_aft_modes,
+    lateral_modes,
+    string_step_s63,
+    vertical_modes,
+)
 from .params import derive
-
 
 CHECKS = {
     "drop.static_deflection_m": _drop_static,
