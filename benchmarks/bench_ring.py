@@ -14,19 +14,9 @@ import statistics
 import time
 
 from jtire import units as U
-from jtire.rigid_ring import scenarios as sc
 from jtire.rigid_ring import synthetic
-from jtire.rigid_ring.params import derive
 from jtire.rigid_ring.table import read_characterization
-from jtire.validate import DEFAULT_CONDITIONS
-
-
-def run_all(d, contact):
-    sc.drop_test(d)
-    sc.drum_cleat(d, contact=contact)
-    sc.lateral_release(d, lateral="ring")
-    for v in (5.0, 15.0):
-        sc.slip_step(d, speed=v, lateral="ring", contact=contact)
+from jtire.validate import DEFAULT_CONDITIONS, ring_results
 
 
 def main(argv=None):
@@ -43,16 +33,15 @@ def main(argv=None):
         rows = [ch.rated_row()]
     print(f"{'condition':>22} {'contact':>7} {'first pass':>11} {'timed (median)':>15} {'string / lag':>13}")
     for row in rows:
-        d = derive(row, ch.tire)
         times = {}
         for contact in ("lag", "string"):
             t0 = time.perf_counter()
-            run_all(d, contact)
+            ring_results(row, ch.tire, contact=contact)  # the validation's own scenarios
             first = time.perf_counter() - t0
             reps = []
             for _ in range(a.repeat):
                 t0 = time.perf_counter()
-                run_all(d, contact)
+                ring_results(row, ch.tire, contact=contact)
                 reps.append(time.perf_counter() - t0)
             times[contact] = statistics.median(reps)
             ratio = f"{times['string'] / times['lag']:.2f}" if contact == "string" else ""

@@ -104,18 +104,21 @@ def step_metrics(result, speeds=(5.0, 15.0)) -> tuple:
     return m, sig
 
 
-def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ, lateral="ring") -> dict:
+def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ, lateral="ring", contact=None) -> dict:
     """The ring's scenarios; belt_band_Hz: where its drop looks for the belt mode (the shell's band,
     or the full BELT_BAND_HZ when the shell has none); lateral: the ring's out-of-plane model in the
-    lateral release and the slip step ("ring": belt DOFs, or "reduced")."""
+    lateral release and the slip step ("ring": belt DOFs, or "reduced"); contact: its tread in the
+    rolling ones ("string", "lag"; None: the model's default)."""
     from .rigid_ring import scenarios as sc
+    from .rigid_ring.model import CONTACT
     from .rigid_ring.params import derive
 
+    contact = contact or CONTACT
     d = derive(row, tire_info)
-    out = {"drop": sc.drop_test(d, f_band=tuple(belt_band_Hz)), "drum": sc.drum_cleat(d),
+    out = {"drop": sc.drop_test(d, f_band=tuple(belt_band_Hz)), "drum": sc.drum_cleat(d, contact=contact),
            "lateral": sc.lateral_release(d, lateral=lateral)}
     for v in (5.0, 15.0):
-        out[f"step_{v:g}"] = sc.slip_step(d, speed=v, lateral=lateral)
+        out[f"step_{v:g}"] = sc.slip_step(d, speed=v, lateral=lateral, contact=contact)
     return out
 
 

@@ -222,7 +222,7 @@ class RigidRing(eqx.Module):
         k_cx = p.k_k / p.a
         c_vlow = p.damp_vlow * k_cx * jnp.clip(1.0 - jnp.abs(V) / VXLOW, 0.0, 1.0)
         v_sx = V * jnp.cos(alpha) + vxb - p.r_e * vthb
-        un, en = y[jnp.asarray(U_NODES)], y[jnp.asarray(E_NODES)]
+        un, en = y[U_NODES[0]:U_NODES[-1] + 1], y[E_NODES[0]:E_NODES[-1] + 1]  # static slices, no gather
         if string:  # a brush: k_k / (2 a^2) per length, so F = k_k kappa steady and k_cx u at V = 0
             u_dot, un_dot, integ, d_integ = string_rates(u, un, -v_sx, V, p.a, None)
             fx_t = p.k_k / (2.0 * p.a**2) * integ + c_vlow * d_integ / (2.0 * p.a)
