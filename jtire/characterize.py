@@ -205,17 +205,19 @@ def tire_info(plan: Plan):
     g = s.geometry
     own = build_mesh(g, s.masses, s.n_theta, s.n_side, s.n_crown).masses()
     choice = {e.name: getattr(e, "inertia", "model") for e in plan.experiments}
+    I_by = decay_inertia(s, own, "belt_Iy_kgm2", choice.get("inplane_rotation", "model"))
+    I_bx = decay_inertia(s, own, "belt_Ix_kgm2", choice.get("sidewall_camber", "model"))
     return TireInfo(name=s.size or plan.tire_path.stem, m_b_kg=s.masses.belt, m_tot_kg=s.masses.tire + s.masses.rim,
-                    tire_mass_kg=s.masses.tire, rim_mass_kg=s.masses.rim,
-                    I_by_kgm2=decay_inertia(s, own, "belt_Iy_kgm2", choice.get("inplane_rotation", "model")),
-                    I_bx_kgm2=decay_inertia(s, own, "belt_Ix_kgm2", choice.get("sidewall_camber", "model")),
+                    tire_mass_kg=s.masses.tire, rim_mass_kg=s.masses.rim, I_by_kgm2=I_by, I_bx_kgm2=I_bx,
                     # the ring's rim body carries the tire's non-belt part (sidewalls, beads) in its spin and
                     # camber inertia as m_a = m_tot - m_b carries it in mass: the ring then spins like the shell
                     I_ay_kgm2=s.masses.rim_Iy + own["nonbelt_Iy_kgm2"],
                     I_ax_kgm2=s.masses.rim_Ixz + own["nonbelt_Ix_kgm2"], unloaded_radius_m=g.outer_radius,
                     width_m=g.section_width, rim_radius_m=g.rim_radius, rim_width_m=g.rim_width,
                     aspect_ratio=g.section_height / g.section_width, rated_load_N=plan.rated["load_N"],
-                    rated_pressure_Pa=plan.rated["pressure_Pa"])
+                    rated_pressure_Pa=plan.rated["pressure_Pa"],
+                    # the whole tire (the .tir's IXX, IYY): the belt as the ring takes it plus the rest
+                    tire_Iy_kgm2=I_by + own["nonbelt_Iy_kgm2"], tire_Ix_kgm2=I_bx + own["nonbelt_Ix_kgm2"])
 
 
 def characterization(plan: Plan, out, found: dict):

@@ -8,6 +8,7 @@ girish-radhakrishnan-250894/slip_angle_control): every section and key it has mu
 the same sections, with the same [UNITS].
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -220,3 +221,24 @@ def test_ellips_keys_come_from_the_nominal_rows_tandem_cam(char):
     assert v["ELLIPS_ORDER"][0] == 1.5 and "scaling" in v["ELLIPS_LENGTH"][1]
     plain = {k: (val, com) for k, val, com in tir.build(char)[0]["CONTACT_PATCH"]}
     assert plain["ELLIPS_SHIFT"] == (0.8, "default: no enveloping identified") and derive(char.rated_row(), char.tire).ellips is None
+
+
+def test_inertia_keys_are_the_whole_tire_when_recorded():
+    """IXX, IYY: the whole tire without rim (belt + the mesh's sidewalls and beads), which a thin-ring
+    check bounds: the belt's I_by alone is below it and m_tire R0^2 above it (no node lies outside
+    the unloaded radius); a characterization without them keeps the belt's values, marked [A]."""
+    from jtire.characterize import load_plan, tire_info
+    from jtire.resources import config_path
+
+    t = tire_info(load_plan(config_path("characterize.toml")))
+    assert t.I_by_kgm2 < t.tire_Iy_kgm2 < t.tire_mass_kg * t.unloaded_radius_m**2
+    assert t.I_bx_kgm2 < t.tire_Ix_kgm2 < t.tire_Iy_kgm2  # a ring: I about a diameter ~ half of I about its axis
+    base = synthetic.characterization()
+    ring = dataclasses.replace(base, tire=dataclasses.replace(base.tire, tire_Iy_kgm2=t.tire_Iy_kgm2,
+                                                              tire_Ix_kgm2=t.tire_Ix_kgm2))
+    for c, iy, ix, mark in ((ring, t.tire_Iy_kgm2, t.tire_Ix_kgm2, False),
+                            (base, base.tire.I_by_kgm2, base.tire.I_bx_kgm2, True)):
+        rows = {k: (v, com) for r in tir.build(c)[0].values() for k, v, com in r}
+        assert rows["IYY"][0] == iy and rows["IXX"][0] == ix and rows["IYY"][1].startswith("[A]") == mark
+    back = type(base.tire).from_dict(dataclasses.asdict(ring.tire))  # and the json round trip keeps them
+    assert back.tire_Iy_kgm2 == t.tire_Iy_kgm2

@@ -12,7 +12,8 @@ the reader ignores it):
       "format": "jtire.characterization", "version": 1,
       "tire": {"name": str, "m_b_kg", "m_tot_kg", "tire_mass_kg", "rim_mass_kg", "I_by_kgm2",
                "I_bx_kgm2", "I_ay_kgm2", "I_ax_kgm2", "unloaded_radius_m", "width_m",
-               "rim_radius_m", "rim_width_m", "aspect_ratio", "rated_load_N", "rated_pressure_Pa"},
+               "rim_radius_m", "rim_width_m", "aspect_ratio", "rated_load_N", "rated_pressure_Pa",
+               "tire_Iy_kgm2", "tire_Ix_kgm2"},   # the last two optional
       "quantities": {"k_sv_N_per_m": {"symbol": "k_sv", "unit": "N/m", "experiment": "E02",
                                       "meaning": "..."}, ...},
       "rows": [{"load_N": 45371.25, "pressure_Pa": 827371.0,
@@ -145,6 +146,10 @@ class TireInfo:
     aspect_ratio: float
     rated_load_N: float
     rated_pressure_Pa: float
+    # the whole tire's (no rim) inertias about the axle and a diameter: belt + sidewalls and beads;
+    # None where not known (the study gives neither; folders written before they were recorded)
+    tire_Iy_kgm2: float | None = None
+    tire_Ix_kgm2: float | None = None
 
     @classmethod
     def from_reference(cls, reference=None, tire_toml=None) -> "TireInfo":
@@ -164,11 +169,11 @@ class TireInfo:
 
     @classmethod
     def from_dict(cls, d: dict) -> "TireInfo":
-        names = [f.name for f in dataclasses.fields(cls)]
-        missing = [n for n in names if n not in d]
+        fields = dataclasses.fields(cls)
+        missing = [f.name for f in fields if f.name not in d and f.default is dataclasses.MISSING]
         if missing:
             raise ConfigError(f"characterization tire: missing {missing}")
-        return cls(**{n: d[n] for n in names})
+        return cls(**{f.name: d[f.name] for f in fields if f.name in d})
 
 
 def _curve_arrays(d: dict, keys, required, where) -> dict:

@@ -130,8 +130,12 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
     put("INFLPRES", p0, "nominal condition pressure")
     put("NOMPRES", p0, "nominal condition pressure")
     put("MASS", t.tire_mass_kg, "tire mass (no rim), tire config")
-    put("IXX", t.I_bx_kgm2, "[A] belt value I_bx: whole-tire inertia not measured")
-    put("IYY", t.I_by_kgm2, "[A] belt value I_by: whole-tire inertia not measured")
+    if t.tire_Iy_kgm2 is not None and t.tire_Ix_kgm2 is not None:
+        put("IXX", t.tire_Ix_kgm2, "whole tire (no rim) about a diameter: I_bx + sidewalls and beads (mesh)")
+        put("IYY", t.tire_Iy_kgm2, "whole tire (no rim) about the axle: I_by + sidewalls and beads (mesh)")
+    else:
+        put("IXX", t.I_bx_kgm2, "[A] belt value I_bx: whole-tire inertia not recorded")
+        put("IYY", t.I_by_kgm2, "[A] belt value I_by: whole-tire inertia not recorded")
     put("BELT_MASS", t.m_b_kg, "m_b, tire config")
     put("BELT_IXX", t.I_bx_kgm2, "I_bx, tire config")
     put("BELT_IYY", t.I_by_kgm2, "I_by, tire config")
