@@ -52,8 +52,9 @@ class NewtonOptions(eqx.Module):
     """Solver settings. rtol: relative to load_scale; eta: GMRES relative tolerance; lam0: initial
     Marquardt damping (0 = plain Newton). Static: max_iter, max_halvings (line search), krylov
     (GMRES basis size; 0 = factor at every iteration), refresh_after (GMRES iterations that make
-    the next iteration refactor), factor_at_solution (also factor at the solution: the next
-    level's preconditioner; always done when differentiating)."""
+    the next iteration refactor), refresh_on_damping (a step the line search shortened makes the
+    next iteration refactor; without it only a failed step or a slow GMRES does), factor_at_solution
+    (also factor at the solution: the next level's preconditioner; always done when differentiating)."""
 
     rtol: Float[Array, ""] = eqx.field(default_factory=lambda: jnp.asarray(RTOL, jnp.float64))
     eta: Float[Array, ""] = eqx.field(default_factory=lambda: jnp.asarray(1e-4, jnp.float64))
@@ -62,6 +63,7 @@ class NewtonOptions(eqx.Module):
     max_halvings: int = eqx.field(static=True, default=12)
     krylov: int = eqx.field(static=True, default=40)
     refresh_after: int = eqx.field(static=True, default=25)
+    refresh_on_damping: bool = eqx.field(static=True, default=True)
     factor_at_solution: bool = eqx.field(static=True, default=False)
 
 
@@ -187,7 +189,9 @@ def newton_krylov(fun_rim, factor_of, u0, P0, P0_valid, w, scale, opts, st, fact
         lam = jnp.where(accept, jnp.where(alpha == 1.0, 0.1 * lam, lam),
                         jnp.where(refresh, jnp.maximum(10.0 * lam, 1e-6), lam))
         lam = jnp.where(lam < 1e-9, 0.0, lam)
-        refresh_next = (~accept) | (k > opts.refresh_after) | (alpha < 1.0)
+        refresh_next = (~accept) | (k > opts.refresh_after)
+        if opts.refresh_on_damping:
+            refresh_next = refresh_next | (alpha < 1.0)
         return u, r, frim, it + 1, lam, rmax(r) <= tol, P, refresh_next, n_fac, n_kry + jnp.minimum(k, opts.krylov)
 
     def cond(c):

@@ -35,7 +35,9 @@ FAR = -10.0  # m: road (or drum top) height of the inflation level: out of reach
 HOLD = np.array([0.0, 0, 0, 0, 0, 0])
 LOADED = np.array([0.0, 0, 1, 0, 1, 0])  # rim z free under the load, the spin free (no drive torque)
 LOADED_SPIN_HELD = np.array([0.0, 0, 1, 0, 0, 0])  # ... the spin prescribed (longitudinal slip)
-ROLLING_OPTIONS = NewtonOptions(max_iter=30)
+# a shortened step does not by itself refactor: the factorization (~0.2 s on the default mesh) costs
+# ~30 GMRES iterations, and a preconditioner gone stale shows as a slow GMRES, which does refactor
+ROLLING_OPTIONS = NewtonOptions(max_iter=30, refresh_on_damping=False)
 LOOSE = 1e-3  # relative residual of the levels on the way (inflation, contact, partial loads): guesses only
 
 

@@ -31,7 +31,10 @@ from ..physics.geometry_ops import V, cross, dot, smooth_ramp, smooth_step
 from . import residual as R
 
 SPIN = 4  # the rim slot that holds Omega
-ROLLING_SHARPNESS = 32  # of the friction saturation: 99.8 % of mu F_n in sliding (the transient's cone is exact)
+# the friction cone's smoothing: exact below (1 - SLIDING_BAND) mu F_n, mu F_n exactly above (1 + band),
+# C2 between (Newton needs C1; the gradient checks' central differences C2). A smoothing that shaves every passage (the p-norm of the static contact)
+# would add up along the streamline: the finer the sampling, the lower the sliding force
+SLIDING_BAND = 0.02
 OMEGA_MIN = 1e-6  # rad/s: below it the tire is treated as standing (no transport)
 FORCE_EPS = 1.0  # N: width of the smooth clip of a contact point's normal force at zero
 
@@ -143,7 +146,22 @@ def maxwell_stresses(model, params, s, omega, dt):
     return flat, power
 
 
-def bristle_transport(model, n_sub, P, n, d, limit, k_t, sharpness=ROLLING_SHARPNESS):
+def saturate_shear(z_t, limit, k_t, band=SLIDING_BAND):
+    """The tread shear z (V) a trial shear z_t (V) leaves under the friction limit mu F_n (N): z_t
+    itself while k_t |z_t| <= (1 - band) limit, the limit along z_t past (1 + band) limit, and between
+    them a C2 blend of the ratio f = k_t |z_t| / limit: g' = 1 - smoothstep(t), t = (f - 1 + band) / (2
+    band), so g = 1 - band + 2 band (t - t^3 + t^4 / 2) (C2: central differences of the solution keep
+    their second order, which a C1 blend's jump in g'' spoils)."""
+    tiny = k_t * 1e-12  # N: |z_t| = 0 and limit = 0 (out of contact, unsheared) stay finite and unsheared
+    kz = jnp.sqrt(k_t * k_t * dot(z_t, z_t) + tiny * tiny)
+    f = kz / (limit + tiny)
+    t = (f - 1 + band) / (2 * band)
+    blend = (1 - band + 2 * band * (t - t**3 + 0.5 * t**4)) / f
+    scale = jnp.where(f <= 1 - band, 1.0, jnp.where(f >= 1 + band, 1.0 / f, blend))
+    return z_t * scale
+
+
+def bristle_transport(model, n_sub, P, n, d, limit, k_t, band=SLIDING_BAND):
     """Tread shear z (V of (N,)) of the steady flow, each column carried from the top of the tire (never
     in contact) down the streamline, z_m = sat(z_{m+1} + d_m) in the tangent plane, and the energy (J)
     each passage dissipates by slip.
@@ -161,7 +179,7 @@ def bristle_transport(model, n_sub, P, n, d, limit, k_t, sharpness=ROLLING_SHARP
     def step(z, m):
         nm = n_[m]
         zp = z - nm * dot(z, nm)
-        zn = R.friction_shear(zp + d_[m] - nm * dot(d_[m], nm), L[m], kt[m], sharpness)
+        zn = saturate_shear(zp + d_[m] - nm * dot(d_[m], nm), L[m], kt[m], band)
         # energy lost in the passage: the work of the mean shear force over the slip less the change
         # of the column's elastic energy (zero while it sticks; all of it when it lets go)
         lost = kt[m] * (0.5 * dot(zn + zp, d_[m]) - 0.5 * (dot(zn, zn) - dot(zp, zp)))
