@@ -303,8 +303,8 @@ def test_implicit_derivatives_match_central_differences(coarse_tire):
     of slip through one steady solve, forward mode (jacfwd) and reverse mode (jacrev: the transposed
     restarted GMRES of `steady.implicit_solve`), against central differences of solves converged to 1e-11 of the load scale
     (step 2e-4 in ln p, solver noise ~1e-8 N / 2e-4; the friction cone, exact outside a +-2 % band,
-    bends the drag steeply in tread G: its central difference misses the derivative by 1.0 / 0.072 /
-    0.0068 % at steps 1e-2 / 1e-3 / 1e-4, measured, second order): each entry within
+    bends the drag steeply in tread G: its central difference misses the derivative by 0.98 / 0.071 /
+    0.0007 % at steps 1e-2 / 1e-3 / 1e-4, measured, second order): each entry within
     1e-4 of its row's largest, and forward = reverse to 1e-6. Slow: compiling the forward and the
     reverse programs takes ~4 minutes here."""
     import equinox as eqx
