@@ -32,8 +32,8 @@ from . import residual as R
 
 SPIN = 4  # the rim slot that holds Omega
 # the friction cone's smoothing: exact below (1 - SLIDING_BAND) mu F_n, mu F_n exactly above (1 + band),
-# C2 between (Newton needs C1; the gradient checks' central differences C2). A smoothing that shaves every passage (the p-norm of the static contact)
-# would add up along the streamline: the finer the sampling, the lower the sliding force
+# C2 between. A smoothing that shaves every passage (the static contact's p-norm) would add up along
+# the streamline: the finer the sampling, the lower the sliding force
 SLIDING_BAND = 0.02
 OMEGA_MIN = 1e-6  # rad/s: below it the tire is treated as standing (no transport)
 FORCE_EPS = 1.0  # N: width of the smooth clip of a contact point's normal force at zero
