@@ -57,8 +57,13 @@ def test_friction_saturation_is_exact_off_its_band_and_does_not_add_up():
     replaced, which shaves every passage, fell with the number of passages)."""
     b = RR.SLIDING_BAND
     k, L = 2.0e5, 100.0
-    sat = lambda f: float(RR.saturate_shear(V(jnp.asarray(f * L / k), jnp.asarray(0.0), jnp.asarray(0.0)),  # noqa: E731
-                                            jnp.asarray(L), jnp.asarray(k)).x) * k / L
+
+    def ratio(saturate, f, *extra):  # k |z| / L after saturating a trial shear of f L / k along x
+        zero = jnp.asarray(0.0)
+        z = saturate(V(jnp.asarray(f * L / k), zero, zero), jnp.asarray(L), jnp.asarray(k), *extra)
+        return float(z.x) * k / L
+
+    sat = lambda f: ratio(RR.saturate_shear, f)  # noqa: E731
     for f in (0.0, 0.3, 1 - b - 1e-9):
         assert sat(f) == pytest.approx(f, abs=1e-12)
     for f in (1 + b + 1e-9, 1.5, 40.0):  # to the guard k_t 1e-12 N added to the limit: 2e-9 of it here
@@ -71,8 +76,7 @@ def test_friction_saturation_is_exact_off_its_band_and_does_not_add_up():
     # a 2-D trial keeps its direction
     z = RR.saturate_shear(V(jnp.asarray(3e-4), jnp.asarray(4e-4), jnp.asarray(0.0)), jnp.asarray(L), jnp.asarray(k))
     assert float(z.y) / float(z.x) == pytest.approx(4 / 3, rel=1e-12)
-    pnorm = lambda f: float(R.friction_shear(V(jnp.asarray(f * L / k), jnp.asarray(0.0), jnp.asarray(0.0)),  # noqa: E731
-                                             jnp.asarray(L), jnp.asarray(k), 32).x) * k / L
+    pnorm = lambda f: ratio(R.friction_shear, f, 32)  # noqa: E731
 
     def slide(g, n):  # from half the limit, 2.5 limits' worth of slip in n passages
         z = 0.5
@@ -163,9 +167,9 @@ def test_maxwell_branch_dissipates_the_closed_form_loss(coarse_tire):
 
 
 # ---- solved states ------------------------------------------------------------------------------
-def _loaded(tire, params, *, load=E12_LOAD, speed=SPEED, subpoints=8, n_load=2):
+def _loaded(tire, params, *, load=E12_LOAD, speed=SPEED, subpoints=8, n_load=2, opts=ER.ROLLING_OPTIONS):
     return ER.loaded_rolling(tire.model, params, P_RATED, load, ER.Road(), speed, n_load=n_load,
-                             omega0=speed / (tire.spec.geometry.outer_radius - 0.01), subpoints=subpoints)
+                             omega0=speed / (tire.spec.geometry.outer_radius - 0.01), subpoints=subpoints, opts=opts)
 
 
 def test_lossless_free_rolling_drags_only_by_its_sliding(coarse_tire, e12_steady):
@@ -191,9 +195,7 @@ def test_steady_state_is_path_independent(coarse_tire, e12_steady):
     load scale on forces; the drag, ~0.5 % of the load, to 1e-4 relative)."""
     from jtire.equilibrium.newton import NewtonOptions
 
-    path = ER.loaded_rolling(coarse_tire.model, coarse_tire.params, P_RATED, E12_LOAD, ER.Road(), SPEED, n_load=1,
-                             omega0=SPEED / (coarse_tire.spec.geometry.outer_radius - 0.01), subpoints=8,
-                             opts=NewtonOptions(max_iter=30, refresh_on_damping=True))
+    path = _loaded(coarse_tire, coarse_tire.params, n_load=1, opts=NewtonOptions(max_iter=30, refresh_on_damping=True))
     path.check("one level")
     q = ok(e12_steady.results[0]).quantities
     assert -float(path.obs[-1]["tire_on_rim"][0]) == pytest.approx(q["rolling_resistance_N"], rel=1e-4)
