@@ -89,6 +89,36 @@ def test_friction_saturation_is_exact_off_its_band_and_does_not_add_up():
     assert slide(pnorm, 1000) < 1 - b < slide(pnorm, 10)  # what it guards against: 0.925 and 1.000
 
 
+@pytest.mark.parametrize("frac", [0.1, 0.5, 0.9])
+def test_sticking_column_is_sheared_from_where_it_touches(frac):
+    """A column that touches the road part-way through a passage is sheared only from there: on a patch
+    whose leading edge lies a fraction `frac` into a passage, with a uniform slip s per unit length and
+    no friction limit inside, every point's shear is the brush model's s (x_lead - x), to the contact
+    onset's smoothing (RAMP_EPS / 2 of position: s RAMP_EPS here). Charging the whole entering passage
+    (the transport before `entry_fraction`) is off by s h (1 - frac) at every point, 20-180 times this
+    tolerance. Sticking loses nothing; leaving, the column gives up its elastic energy, all of it lost."""
+    from jtire.physics.contact import RAMP_EPS
+    from types import SimpleNamespace
+
+    T, ns, h, s, k = 8, 8, 6.5e-3, 0.01, 3.0e4  # ring segments, points per segment, m, slip, N/m
+    M = T * ns
+    x = np.arange(M) * h  # material flows from point m + 1 to m: towards -x, entering at x_lead
+    x_lead, x_trail = (20 + frac) * h, 5.2 * h
+    gap = -np.minimum(x_lead - x, x - x_trail)  # piecewise linear, < 0 inside the patch
+    zero = jnp.zeros(M)
+    n = V(zero, zero, zero + 1.0)
+    d = V(zero + s * h, zero, zero)
+    limit = jnp.where(jnp.asarray(gap) < 0, 1e9, 0.0)
+    z, lost = RR.bristle_transport(SimpleNamespace(n_theta=T, tread_cols_t=[0]), ns, V(zero, zero, zero), n, d,
+                                   jnp.asarray(gap), limit, zero + k)
+    inside = gap < -RAMP_EPS
+    assert np.max(np.abs(np.asarray(z.x)[inside] - s * (x_lead - x[inside]))) < s * RAMP_EPS
+    assert np.max(np.abs(np.asarray(z.x)[gap > 0])) < 1e-6 * s * h  # unsheared outside (0/0 guard: 1e-12 m)
+    last = np.asarray(z.x)[inside][0]  # the column's shear at the last point in contact
+    assert float(jnp.sum(lost)) == pytest.approx(0.5 * k * last**2, rel=1e-9)
+    assert np.max(np.abs(np.asarray(lost)[inside])) < 1e-9 * 0.5 * k * last**2
+
+
 def test_circulant_transport_is_the_periodic_recurrence():
     """s_i = a s_{i+1} + b_i around a ring: the circulant solve against iterating the recurrence until
     it repeats (contraction a^T per lap): round-off."""

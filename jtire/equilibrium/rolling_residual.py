@@ -11,7 +11,8 @@ dt = dtheta / Omega. From the shape alone follow
   Maxwell      each branch stress integrated exactly along its streamline around the ring (periodic:
                a circulant solve), the strain rate constant over each passage between labels,
   bristles     each tread column's shear carried through the contact patch from the leading edge, the
-               slip of each passage its exact displacement relative to the road, saturated at mu F_n.
+               slip of each passage its exact displacement relative to the road (on the passage that
+               enters the patch, only the part spent touching), saturated at mu F_n.
 The residual is minus the net force on every degree of freedom (`residual.py`'s convention), so the
 static residual is its Omega -> 0 limit. The unknowns are `residual.pack(x, q)` with one change: the
 rim's spin slot q[4] holds Omega (the rim is axisymmetric, its spin angle is immaterial), and its row
@@ -161,18 +162,30 @@ def saturate_shear(z_t, limit, k_t, band=SLIDING_BAND):
     return z_t * scale
 
 
-def bristle_transport(model, n_sub, P, n, d, limit, k_t, band=SLIDING_BAND):
-    """Tread shear z (V of (N,)) of the steady flow, each column carried from the top of the tire (never
-    in contact) down the streamline, z_m = sat(z_{m+1} + d_m) in the tangent plane, and the energy (J)
-    each passage dissipates by slip.
+def entry_fraction(gap):
+    """(M, C) fraction of each passage m+1 -> m a column spends touching the surface, from the gaps
+    (M, C) at its ends (linear along a passage): 1 inside the patch, -gap_m / (gap_m+1 - gap_m) on the
+    passage that enters it. A column that touches part-way through a passage has slipped over that
+    part only; charging it the whole passage shears every column of the patch by up to one passage
+    too much (a first-order error in the sampling). 0 out of contact and leaving it (no limit there)."""
+    pen = smooth_ramp(-gap, RAMP_EPS)
+    clear = smooth_ramp(jnp.roll(gap, -1, 0), RAMP_EPS)
+    return pen / (pen + clear + 1e-3 * RAMP_EPS)
 
-    P, n, d, limit, k_t: tread points, surface normals, the slip displacement of each passage (the
-    material's displacement minus the surface's, m) and mu F_n, k_t per point, (N,) in the tread's
-    (segment, sub-point, column) order."""
+
+def bristle_transport(model, n_sub, P, n, d, gap, limit, k_t, band=SLIDING_BAND):
+    """Tread shear z (V of (N,)) of the steady flow, each column carried from the top of the tire (never
+    in contact) down the streamline, z_m = sat(z_{m+1} + phi_m d_m) in the tangent plane (phi: the part
+    of the passage spent touching, `entry_fraction`), and the energy (J) each passage dissipates by slip.
+
+    P, n, d, gap, limit, k_t: tread points, surface normals, the slip displacement of each passage (the
+    material's displacement minus the surface's, m), the gaps (m), mu F_n and k_t per point, (N,) in the
+    tread's (segment, sub-point, column) order."""
     M = model.n_theta * n_sub
     C = len(model.tread_cols_t)
     rs = lambda a: a.reshape(M, C)  # noqa: E731
-    n_, d_, L, kt = n.map(rs), d.map(rs), rs(limit), rs(k_t)
+    phi = entry_fraction(rs(gap))
+    n_, d_, L, kt = n.map(rs), d.map(lambda a: rs(a) * phi), rs(limit), rs(k_t)
     start = M // 2  # the top of the tire: out of contact on a road or drum below it
     order = (start - np.arange(M)) % M
 
@@ -247,7 +260,7 @@ def rolling_forces(model, params, setup, u):
     # the slip of a passage sub-point m+1 -> m: the material's displacement less the surface's
     step = (Pm - Pm.map(lambda a: jnp.roll(a, -1, 0))).map(flat)
     d = step - v_s * dt_sub
-    z, lost = bristle_transport(model, ns, P, n, d, params.friction * setup.friction_on * F_n, k_t)
+    z, lost = bristle_transport(model, ns, P, n, d, gap, params.friction * setup.friction_on * F_n, k_t)
     F = n * F_n - z * k_t
     p_fric = jnp.sum(lost) / dt_sub
 
