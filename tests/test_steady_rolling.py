@@ -5,6 +5,8 @@ the streamlines, symmetry, energy, and agreement with the transients and the bru
 Tolerances, each with its reason, beside its test.
 """
 
+from types import SimpleNamespace
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -14,7 +16,7 @@ from jtire import units as U
 from jtire.equilibrium import residual as R
 from jtire.equilibrium import rolling as ER
 from jtire.equilibrium import rolling_residual as RR
-from jtire.physics.contact import FlatRoad
+from jtire.physics.contact import RAMP_EPS, FlatRoad
 from jtire.physics.geometry_ops import V
 
 from .conftest import E12_LOAD, P_RATED, contact_patch, ok
@@ -96,10 +98,8 @@ def test_sticking_column_is_sheared_from_where_it_touches(frac):
     no friction limit inside, every point's shear is the brush model's s (x_lead - x), to the contact
     onset's smoothing (RAMP_EPS / 2 of position: s RAMP_EPS here). Charging the whole entering passage
     (the transport before `entry_fraction`) is off by s h (1 - frac) at every point, 32-292 times this
-    tolerance (measured). Sticking loses nothing; leaving, the column gives up its elastic energy, all of it lost."""
-    from jtire.physics.contact import RAMP_EPS
-    from types import SimpleNamespace
-
+    tolerance (measured). Sticking loses nothing; leaving, the column gives up its elastic energy, all
+    of it lost."""
     T, ns, h, s, k = 8, 8, 6.5e-3, 0.01, 3.0e4  # ring segments, points per segment, m, slip, N/m
     M = T * ns
     x = np.arange(M) * h  # material flows from point m + 1 to m: towards -x, entering at x_lead
