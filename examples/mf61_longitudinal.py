@@ -5,41 +5,44 @@ from them.
 A stand-in for a vehicle engineer's own tool, like mf61_lateral.py beside it (whose .tir reader it
 shares): it does not import jtire, only numpy and matplotlib. Equations: Pacejka, Tire and Vehicle
 Dynamics, 3rd ed. (2012), section 4.3.2, F_x0 by (4.E9)-(4.E18), at zero camber (PDX3 drops out,
-zeta_1 = 1), nominal pressure (dp_i = 0: PPX* drop out). Scaling factors LFZO, LCX, LMUX, LEX, LKX,
-LHX, LVX are read from [SCALING_COEFFICIENTS], 1 when absent. Signs ISO-W: kappa > 0 drives, F_x > 0.
+zeta_1 = 1). The inflation-pressure terms PPX1-PPX4 (K_xk and mu_x against dp_i = (p - NOMPRES)/NOMPRES)
+are read when present, 0 when absent; they act only at another pressure than NOMPRES (--all-pressures).
+Scaling factors LFZO, LCX, LMUX, LEX, LKX, LHX, LVX are read from [SCALING_COEFFICIENTS], 1 when
+absent. Signs ISO-W: kappa > 0 drives, F_x > 0.
 
 --curves: a characterization.json; its rows at the file's NOMPRES that carry E06 curves are drawn as
 points, each less its free-rolling F_x (the rolling resistance, which MF carries in M_y, not F_x0),
 and one line per row gives the largest |F_x0 - F_x| over 0-10 % slip in % of the curve's peak.
+--all-pressures: every row with E06 curves, each evaluated at its own pressure.
 
-Usage: python examples/mf61_longitudinal.py TIR_FILE --out PNG [--loads-kN 20,45.4,68] [--curves JSON]
+Usage: python examples/mf61_longitudinal.py TIR_FILE --out PNG [--loads-kN 20,45.4,68] [--curves JSON [--all-pressures]]
 Exits 2 with one line on stderr naming the file (and key) when a file is missing or unreadable, or the
 .tir lacks a key the equations need, holds text where they need a number, or is not SI / FITTYP 61, 62.
 """
 
 import argparse
-import json
-import math
 import sys
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from mf61_lateral import TirError, loads_asked, numbers, parse_tir  # noqa: E402  (the sibling script's reader)
+from mf61_lateral import TirError, curve_rows, loads_asked, numbers, parse_tir  # noqa: E402  (the sibling script's reader)
 
 FX_KEYS = ("FNOMIN", "NOMPRES", "PCX1", "PDX1", "PDX2", "PEX1", "PEX2", "PEX3", "PEX4", "PKX1", "PKX2", "PKX3",
            "PHX1", "PHX2", "PVX1", "PVX2")
 SCALING = ("LFZO", "LCX", "LMUX", "LEX", "LKX", "LHX", "LVX")
+PRESSURE = ("PPX1", "PPX2", "PPX3", "PPX4")  # 0 when absent: no pressure dependence
 
 
 def coefficients(path, tir):
     """The numbers the F_x0 equations need, checked: {KEY: float}."""
-    return numbers(path, tir, FX_KEYS, SCALING, "F_x0")
+    return numbers(path, tir, FX_KEYS, SCALING, "F_x0", PRESSURE)
 
 
-def longitudinal(c, fz, kappa):
-    """Pure longitudinal slip at gamma = 0, nominal pressure: F_x0 (N), K_xk (N), D_x (N). Broadcasts."""
+def longitudinal(c, fz, kappa, dpi=0.0):
+    """Pure longitudinal slip at gamma = 0: F_x0 (N), K_xk (N), D_x (N); dpi = (p - NOMPRES)/NOMPRES.
+    Broadcasts."""
     fz, kappa = np.asarray(fz, float), np.asarray(kappa, float)
     fz0 = c["FNOMIN"] * c["LFZO"]                                                # (4.E1)
     dfz = (fz - fz0) / fz0                                                       # (4.E2a)
@@ -47,33 +50,28 @@ def longitudinal(c, fz, kappa):
     shx = (c["PHX1"] + c["PHX2"] * dfz) * c["LHX"]                               # (4.E17)
     kx = kappa + shx                                                             # (4.E10)
     cx = c["PCX1"] * c["LCX"]                                                    # (4.E11)
-    dx = (c["PDX1"] + c["PDX2"] * dfz) * c["LMUX"] * fz                          # (4.E12), (4.E13)
+    mu_p = 1 + c.get("PPX3", 0.0) * dpi + c.get("PPX4", 0.0) * dpi**2
+    dx = (c["PDX1"] + c["PDX2"] * dfz) * mu_p * c["LMUX"] * fz                   # (4.E12), (4.E13)
     ex = np.minimum((c["PEX1"] + c["PEX2"] * dfz + c["PEX3"] * dfz**2) * (1 - c["PEX4"] * np.sign(kx)) * c["LEX"],
                     1.0)                                                         # (4.E14)
-    kxk = fz * (c["PKX1"] + c["PKX2"] * dfz) * np.exp(c["PKX3"] * dfz) * c["LKX"]  # (4.E15)
+    kxk = (fz * (c["PKX1"] + c["PKX2"] * dfz) * np.exp(c["PKX3"] * dfz)
+           * (1 + c.get("PPX1", 0.0) * dpi + c.get("PPX2", 0.0) * dpi**2) * c["LKX"])  # (4.E15)
     bx = kxk / (cx * dx + np.where(cx * dx >= 0, 1e-12, -1e-12))                 # (4.E16)
     svx = fz * (c["PVX1"] + c["PVX2"] * dfz) * c["LVX"] * lmux_prime             # (4.E18)
     fx = dx * np.sin(cx * np.arctan(bx * kx - ex * (bx * kx - np.arctan(bx * kx)))) + svx  # (4.E9)
     return {"fx": fx, "kxk": kxk, "dx": dx}
 
 
-def simulated_curves(path, nompres):
-    """[(F_z, kappa, F_x - F_x(0))] of the characterization's rows at NOMPRES with E06 curves."""
-    try:
-        rows = json.loads(Path(path).read_text())["rows"]
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        raise TirError(f"{path}: not a readable characterization.json ({e})") from None
+def simulated_curves(path, nompres, every_pressure=False):
+    """[(F_z, dp_i, kappa, F_x - F_x(0))] of the characterization's rows at NOMPRES (every_pressure: at
+    every pressure) with E06 curves."""
     out = []
-    for r in rows:
-        cv = r.get("E06_curves")
-        if cv and math.isclose(r.get("pressure_Pa", 0.0), nompres, rel_tol=1e-6):
-            k, f = np.asarray(cv["slip"], float), np.asarray(cv["force_x_N"], float)
-            ok = np.isfinite(k) & np.isfinite(f)
-            k, f = k[ok], f[ok]
-            out.append((float(r["load_N"]), k, f - float(np.interp(0.0, k, f))))
-    if not out:
-        raise TirError(f"{path}: no row at NOMPRES = {nompres:g} Pa carries E06 curves")
-    return sorted(out, key=lambda x: x[0])
+    for fz, dpi, cv in curve_rows(path, "E06_curves", nompres, every_pressure):
+        k, f = np.asarray(cv["slip"], float), np.asarray(cv["force_x_N"], float)
+        ok = np.isfinite(k) & np.isfinite(f)
+        k, f = k[ok], f[ok]
+        out.append((fz, dpi, k, f - float(np.interp(0.0, k, f))))
+    return out
 
 
 def main(argv=None):
@@ -82,14 +80,16 @@ def main(argv=None):
     ap.add_argument("--out", required=True, help="PNG to write")
     ap.add_argument("--loads-kN", default=None, help="comma-separated loads in kN (default 0.5, 1, 1.5 x FNOMIN)")
     ap.add_argument("--curves", default=None, help="a characterization.json whose E06 curves to compare")
+    ap.add_argument("--all-pressures", action="store_true",
+                    help="with --curves: compare the rows at every pressure (default: NOMPRES only)")
     args = ap.parse_args(argv)
     try:
         c = coefficients(args.tir, parse_tir(args.tir))
-        sim = simulated_curves(args.curves, c["NOMPRES"]) if args.curves else []
+        sim = simulated_curves(args.curves, c["NOMPRES"], args.all_pressures) if args.curves else []
     except TirError as e:
         print(f"mf61_longitudinal: {e}", file=sys.stderr)
         return 2
-    loads = [fz for fz, _, _ in sim] if sim else loads_asked(ap, args.loads_kN, c["FNOMIN"])
+    loads = sorted({fz for fz, _, _, _ in sim}) if sim else loads_asked(ap, args.loads_kN, c["FNOMIN"])
     kappa = np.linspace(0.0, 0.3, 3001)
     print(f"{args.tir}: FITTYP {c['FITTYP']:g}, FNOMIN {c['FNOMIN']:.2f} N\n"
           "ISO-W signs (kappa > 0 driving), camber 0, nominal pressure, pure longitudinal slip")
@@ -99,18 +99,20 @@ def main(argv=None):
         k = int(np.argmax(part["fx"]))
         print(f"{fz:12.2f} {float(part['kxk']):14.7g} {part['fx'][k]:14.7g} {100 * kappa[k]:13.2f} "
               f"{float(part['dx']):13.7g}")
-    for fz, k, f in sim:  # the file against the simulated curves, over 0-10 % slip
+    for fz, dpi, k, f in sim:  # the file against the simulated curves, over 0-10 % slip
         w = k <= 0.10 + 1e-12
-        err = np.max(np.abs(longitudinal(c, fz, k[w])["fx"] - f[w])) / max(np.max(np.abs(f)), 1e-9)
-        print(f"{fz:12.2f} N: max |F_x0 - F_x| over 0-10 % slip = {100 * err:.2f} % of the curve's peak")
+        err = np.max(np.abs(longitudinal(c, fz, k[w], dpi)["fx"] - f[w])) / max(np.max(np.abs(f)), 1e-9)
+        at = f" at {c['NOMPRES'] * (1 + dpi) / 1e3:.0f} kPa" if args.all_pressures else ""
+        print(f"{fz:12.2f} N{at}: max |F_x0 - F_x| over 0-10 % slip = {100 * err:.2f} % of the curve's peak")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6.5, 4.2))
     for i, fz in enumerate(loads):
         ax.plot(100 * kappa, longitudinal(c, fz, kappa)["fx"] / 1e3, color=f"C{i}", label=f"MF, F_z = {fz / 1e3:.1f} kN")
-    for i, (fz, k, f) in enumerate(sim):
-        ax.plot(100 * k, f / 1e3, "o", color=f"C{i}", ms=4, label=f"simulated (E06), {fz / 1e3:.1f} kN")
+    for fz, dpi, k, f in sim:  # the points at NOMPRES (the MF lines are at NOMPRES)
+        if abs(dpi) < 1e-9:
+            ax.plot(100 * k, f / 1e3, "o", color=f"C{loads.index(fz)}", ms=4, label=f"simulated (E06), {fz / 1e3:.1f} kN")
     ax.set(xlabel="longitudinal slip kappa [%] (ISO-W)", ylabel="F_x0 [kN]", title=f"MF {Path(args.tir).name}")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)

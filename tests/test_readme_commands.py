@@ -23,6 +23,7 @@ from jtire.cli import main
 from jtire.config import load_run_config
 
 from .conftest import COARSE_SET, REPO, SOLVER_SET, ok
+from .test_tutorial_tir import read_back_errors
 
 README = REPO / "README.md"
 DOCS = sorted((REPO / "docs").rglob("*.md"))  # the README's pages and the site's tutorials: their commands too
@@ -62,6 +63,8 @@ COVERED = {
     r"jtire export-tir( \S+)*": "test_export_tir",
     r"python examples/mf61_lateral\.py runs/characterize/tire\.tir --out runs/fy_alpha\.png":
         "test_tutorial_tir::test_tutorial_tir_commands",
+    r"python examples/mf61_lateral\.py runs/characterize/tire\.tir --curves runs/characterize/characterization\.json "
+    r"--out runs/fy_curves\.png": "test_tutorial_tir::test_tutorial_lateral_curves_command",
     r"python examples/mf61_longitudinal\.py runs/characterize/tire\.tir --curves runs/characterize/characterization\.json "
     r"--out runs/fx_kappa\.png": "test_tutorial_tir::test_tutorial_longitudinal_command",
     r"jtire reproduce(( --quick)? --out runs/study(_quick)?)?": "test_readme_workflows::test_reproduce_quick",
@@ -286,6 +289,10 @@ def test_characterize_one_condition_validated(user_dir, capsys):
     assert all(len(r["E06_curves"]["slip"]) >= 4 for r in char["rows"])
     assert re.search(r"^PCX1\s+= [-0-9.e+]+\s+\$fitted to E06's force-slip curves", tir, re.M)
     assert "[INERTIA]" in tir and re.search(r"^MASS\s+= [0-9.]+ ", tir.split("[INERTIA]")[1], re.M)
+    # the .tir read back by the example evaluators (no jtire) against the shell's own curves: within
+    # 5 % of each curve's peak (issue 28's goal for F_y over 0-8 deg and F_x over 0-10 % slip)
+    errs, text = read_back_errors(out)
+    assert len(errs["F_y"]) == len(errs["F_x"]) == 1 and max(errs["F_y"] + errs["F_x"]) < 5.0, text
 
 
 @pytest.mark.slow
