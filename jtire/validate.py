@@ -15,6 +15,7 @@ steady force against. Ring side:
 against its tolerance (stated up front there).
 """
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -122,15 +123,26 @@ def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ, lateral="ring", cont
     return out
 
 
+# contact points per segment of the shell's slip step (at least; the tire's own when it has more): the
+# force's build-up over a short light-load patch is resolved only from 4 on (docs/rigid-ring.md, Validation)
+STEP_CONTACT_SUBPOINTS = 8
+
+
+def step_tire(tire):
+    """The tire spec the shell's slip step runs on: `tire` with >= STEP_CONTACT_SUBPOINTS contact points."""
+    return dataclasses.replace(tire, contact_subpoints=max(tire.contact_subpoints, STEP_CONTACT_SUBPOINTS))
+
+
 def slip_steps(char_dir, plan, conds, slip_step_table=None, batch_size=1, on_case=None) -> list:
-    """The slip-angle step at each condition (SI dicts), resumed from DIR/validation. Returns one entry
-    per condition: its ExperimentResult (read back from its folder) or its error message (str).
-    on_case(name or None, n_done, n_total): at the start (None) and as each condition is saved (the
-    CLI draws a progress bar with it)."""
+    """The slip-angle step at each condition (SI dicts), on `step_tire(plan.tire)`, resumed from
+    DIR/validation. Returns one entry per condition: its ExperimentResult (read back from its folder)
+    or its error message (str). on_case(name or None, n_done, n_total): at the start (None) and as
+    each condition is saved (the CLI draws a progress bar with it)."""
     from .experiments import REGISTRY
 
-    exp = REGISTRY["slip_step"].from_table(_step_table(slip_step_table), _protocol(plan), plan.tire)
-    return _resumed(Path(char_dir) / "validation", "slip_step", exp, plan, conds, batch_size, on_case)
+    tire = step_tire(plan.tire)
+    exp = REGISTRY["slip_step"].from_table(_step_table(slip_step_table), _protocol(plan), tire)
+    return _resumed(Path(char_dir) / "validation", "slip_step", exp, plan, conds, batch_size, on_case, tire=tire)
 
 
 # load levels of the steady loading at speed, tried in turn for a condition whose loading failed (E10
@@ -198,16 +210,17 @@ def _protocol(plan):
     return Protocol.from_dict(plan.solver)
 
 
-def _resumed(folder, key, exp, plan, conds, batch_size, on_case) -> list:
-    """Run exp at every condition not yet saved in folder/cases (claimed with these settings), then
-    read every condition back: its ExperimentResult or its error message (str)."""
+def _resumed(folder, key, exp, plan, conds, batch_size, on_case, tire=None) -> list:
+    """Run exp on `tire` (default plan.tire) at every condition not yet saved in folder/cases (claimed
+    with these settings), then read every condition back: its ExperimentResult or its error message (str)."""
     from . import batch
     from .fingerprint import claim_folder, code_version
     from .io import check_writable
     from .tire import make_tire
 
+    tire = plan.tire if tire is None else tire
     folder = check_writable(Path(folder))
-    claim_folder(folder, {key: exp, "tire": plan.tire, "solver": plan.solver, "conditions": conds,
+    claim_folder(folder, {key: exp, "tire": tire, "solver": plan.solver, "conditions": conds,
                           "jtire": code_version()})
     names = [results.case_name(i, c) for i, c in enumerate(conds)]
     cases = results.cases_dir(folder)
@@ -226,7 +239,7 @@ def _resumed(folder, key, exp, plan, conds, batch_size, on_case) -> list:
             on_case(names[todo[k]], done[0], len(conds))
 
     if todo:
-        batch.run(exp, make_tire(plan.tire), [conds[i] for i in todo], batch=batch_size, on_result=save)
+        batch.run(exp, make_tire(tire), [conds[i] for i in todo], batch=batch_size, on_result=save)
     return [_read_case(cases / n) for n in names]
 
 

@@ -202,6 +202,33 @@ def test_resume_runs_nothing_finished_and_other_settings_refuse(plan_and_folder,
     assert ran == []
 
 
+def test_slip_step_runs_on_the_finer_contact_and_its_folder_says_so(plan_and_folder, monkeypatch):
+    """The shell's slip step runs on the tire with STEP_CONTACT_SUBPOINTS contact points per segment
+    (the default tire has 2), everything else the tire's; the steady references on the tire as it is;
+    the step's folder records the tire it ran on, so a folder made on the coarser contact refuses."""
+    import dataclasses
+    import json
+
+    from jtire.validate import STEP_CONTACT_SUBPOINTS, step_tire
+
+    plan, folder = plan_and_folder
+    fake_runs(monkeypatch)
+    specs = []
+    monkeypatch.setattr("jtire.tire.make_tire", specs.append)
+    validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
+    assert plan.tire.contact_subpoints == 2 < STEP_CONTACT_SUBPOINTS
+    assert specs[0] == dataclasses.replace(plan.tire, contact_subpoints=STEP_CONTACT_SUBPOINTS)  # the step
+    assert len(specs) > 1 and all(s == plan.tire for s in specs[1:])  # the steady references
+    saved = json.loads((folder / "validation" / "settings.json").read_text())
+    assert saved["tire"]["contact_subpoints"] == STEP_CONTACT_SUBPOINTS
+    finer = dataclasses.replace(plan.tire, contact_subpoints=STEP_CONTACT_SUBPOINTS)
+    assert step_tire(finer) == finer
+    saved["tire"]["contact_subpoints"] = 2  # a folder the coarser contact made
+    (folder / "validation" / "settings.json").write_text(json.dumps(saved))
+    with pytest.raises(ConfigError, match="holds results made with other settings.*contact_subpoints"):
+        validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
+
+
 def test_characterize_reports_a_failed_step_as_an_error(plan_and_folder, monkeypatch, capsys):
     """The command's validation: the failure is listed for the final error line (exit 2) and written
     under its condition in validation.md; the progress bar moves per condition (stderr)."""
