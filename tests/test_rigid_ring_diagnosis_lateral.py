@@ -145,3 +145,18 @@ def test_s63_first_order_lag_vs_contact_length(char, rated):
     x = explain(char, rated, {"step_5.s63_m": 0.4 * d.sigma}, {"step_5.s63_m": d.sigma},
                  shell_signals={"step_5": (s, fy)})["step_5.s63_m"]
     assert "overshoots by" in x.text
+
+
+def test_s63_and_F_y_say_when_the_shells_step_has_not_settled(char, rated):
+    """A shell step whose F_y still rises at its record's end (a first-order build-up over a 4.5 sigma
+    record: its last tenth's mean +0.8 % over the tenth before) is named in the s63 and steady F_y rows,
+    with the change; a record of 12 sigma (+0.0 %) is not; the 0.5 % threshold sits between the two."""
+    d = derive(rated, char.tire)
+    rows = {"step_5.s63_m": 0.6 * d.sigma, "step_5.F_y_steady_N": -9000.0}
+    ring = {"step_5.s63_m": d.sigma, "step_5.F_y_steady_N": -9900.0}
+    for n_sigma, named in ((4.5, True), (12.0, False)):
+        s = np.linspace(0.0, n_sigma * d.sigma, 601)
+        fy = -9000.0 * (1 - np.exp(-s / d.sigma))
+        x = explain(char, rated, rows, ring, shell_signals={"step_5": (s, fy)})
+        for metric in rows:
+            assert ("still moves +0.8 % over its record's last" in x[metric].text) is named, (n_sigma, x[metric].text)

@@ -49,6 +49,28 @@ def _speeds(cx):
     return sorted({float(m.split(".")[0][5:]) for m in cx.rows if m.startswith("step_")})
 
 
+def _step_unsettled(cx, v, tol=0.005):
+    """The shell step's text when its F_y still moves at the record's end: the mean over the last tenth
+    of the distance against the tenth before it, beyond tol (relative). None when settled or no record."""
+    sig = (cx.shell_signals or {}).get(f"step_{v:g}")
+    if sig is None:
+        return None
+    s, fy = (np.asarray(x, float) for x in sig)
+    ok = np.isfinite(s) & np.isfinite(fy)
+    s, fy = s[ok], fy[ok]
+    if s.size < 20:
+        return None
+    w = 0.1 * (s[-1] - s[0])
+    last, before = fy[s >= s[-1] - w], fy[(s >= s[-1] - 2 * w) & (s < s[-1] - w)]
+    if not (last.size and before.size and np.mean(before)):
+        return None
+    change = float(np.mean(last) / np.mean(before)) - 1
+    if abs(change) <= tol:
+        return None
+    return (f"the shell's F_y still moves {_p(change)} over its record's last {_n(w, 'm')} (mean against the "
+            f"{_n(w, 'm')} before): its steady value, and the s63 measured against it, are taken before it settled")
+
+
 def _step_alpha(cx):
     """Slip angle of the step (rad) from the ring's steady F_y = -k_f sin(alpha)."""
     for v in _speeds(cx):
@@ -156,6 +178,9 @@ def _step_force(cx, c, key):
             state = _verdict(pred, shell, ring, c.tolerance)
             if state == PARTIAL:
                 parts.append("the rest is not established")
+    moving = _step_unsettled(cx, v_here) if key == "F_y" else None
+    if moving:
+        parts.append(moving)
     st = _e10_settling(cx, alpha) if alpha else None
     if st is not None:
         drift, win, v, short = st
@@ -207,6 +232,9 @@ def _step_s63(cx, c):
             if over > 0.02:
                 parts.append(f"the shell's F_y overshoots by {_p(over)} (a lightly damped carcass mode: it reaches "
                              f"63 % sooner than a lag does)")
+    moving = _step_unsettled(cx, v_here)
+    if moving:
+        parts.append(moving)
     txt = "; ".join(parts)
     if state == PARTIAL:
         txt += "; the rest is not established"
