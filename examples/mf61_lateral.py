@@ -182,10 +182,10 @@ def curve_rows(path, key, nompres, every_pressure=False):
     "E06_curves") at NOMPRES (every_pressure: at every pressure), by pressure then load."""
     try:
         rows = json.loads(Path(path).read_text())["rows"]
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        raise TirError(f"{path}: not a readable characterization.json ({e})") from None
-    out = [(float(r["load_N"]), (float(r["pressure_Pa"]) - nompres) / nompres, r[key]) for r in rows
-           if r.get(key) and (every_pressure or math.isclose(float(r["pressure_Pa"]), nompres, rel_tol=1e-6))]
+        out = [(float(r["load_N"]), (float(r["pressure_Pa"]) - nompres) / nompres, r[key]) for r in rows
+               if r.get(key) and (every_pressure or math.isclose(float(r["pressure_Pa"]), nompres, rel_tol=1e-6))]
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
+        raise TirError(f"{path}: not a readable characterization.json ({type(e).__name__}: {e})") from None
     if not out:
         raise TirError(f"{path}: no row {'' if every_pressure else f'at NOMPRES = {nompres:g} Pa '}carries {key}")
     return sorted(out, key=lambda x: (x[1], x[0]))
@@ -197,6 +197,8 @@ def simulated_curves(path, nompres, every_pressure=False):
     road-axis force turned by alpha with F_x, (lateral + F_x sin a) / cos a, else the road-axis force."""
     out = []
     for fz, dpi, cv in curve_rows(path, "E10_curves", nompres, every_pressure):
+        if not all(k in cv for k in ("slip_angle_deg", "lateral_force_N")):
+            raise TirError(f"{path}: an E10_curves entry lacks slip_angle_deg or lateral_force_N")
         a = np.radians(np.asarray(cv["slip_angle_deg"], float))
         if cv.get("F_y_SAE_N") is not None:
             fy = np.asarray(cv["F_y_SAE_N"], float)
@@ -219,6 +221,8 @@ def main(argv=None):
     ap.add_argument("--all-pressures", action="store_true",
                     help="with --curves: compare the rows at every pressure (default: NOMPRES only)")
     args = ap.parse_args(argv)
+    if args.all_pressures and not args.curves:
+        ap.error("--all-pressures compares curves: give --curves too")
     try:
         tir = parse_tir(args.tir)
         c, lacking_mz = coefficients(args.tir, tir)

@@ -67,6 +67,8 @@ def simulated_curves(path, nompres, every_pressure=False):
     every pressure) with E06 curves."""
     out = []
     for fz, dpi, cv in curve_rows(path, "E06_curves", nompres, every_pressure):
+        if not all(k in cv for k in ("slip", "force_x_N")):
+            raise TirError(f"{path}: an E06_curves entry lacks slip or force_x_N")
         k, f = np.asarray(cv["slip"], float), np.asarray(cv["force_x_N"], float)
         ok = np.isfinite(k) & np.isfinite(f)
         k, f = k[ok], f[ok]
@@ -83,6 +85,8 @@ def main(argv=None):
     ap.add_argument("--all-pressures", action="store_true",
                     help="with --curves: compare the rows at every pressure (default: NOMPRES only)")
     args = ap.parse_args(argv)
+    if args.all_pressures and not args.curves:
+        ap.error("--all-pressures compares curves: give --curves too")
     try:
         c = coefficients(args.tir, parse_tir(args.tir))
         sim = simulated_curves(args.curves, c["NOMPRES"], args.all_pressures) if args.curves else []

@@ -340,13 +340,31 @@ def read_back_errors(folder):
     return out, "\n".join(text)
 
 
-def test_lateral_curves_missing_exits_2(tir_path, tmp_path):
-    png, none = tmp_path / "fy.png", tmp_path / "none.json"
-    r = subprocess.run([sys.executable, str(SCRIPT), str(tir_path), "--curves", str(none), "--out", str(png)],
+@pytest.mark.parametrize("which", ["lateral", "longitudinal"])
+@pytest.mark.parametrize("case", ["missing", "row_without_load", "curve_without_data", "all_pressures_alone"])
+def test_bad_curves_exit_2(tir_path, tmp_path, which, case):
+    """A --curves file that is missing, a row without its load, a curve without its data, and
+    --all-pressures without --curves: exit 2, nothing on stdout, no PNG, the file (or option) named."""
+    import json
+
+    script = SCRIPT if which == "lateral" else SCRIPT_X
+    key = "E10_curves" if which == "lateral" else "E06_curves"
+    png, curves = tmp_path / "out.png", tmp_path / "c.json"
+    char = json.loads((tir_path.parent / "characterize" / "characterization.json").read_text())
+    if case == "row_without_load":
+        for r in char["rows"]:
+            del r["load_N"]
+    elif case == "curve_without_data":
+        for r in char["rows"]:
+            r[key] = {"F_z_N": [1.0]}
+    if case != "missing":
+        curves.write_text(json.dumps(char))
+    extra = ["--all-pressures"] if case == "all_pressures_alone" else ["--curves", str(curves)]
+    r = subprocess.run([sys.executable, str(script), str(tir_path), *extra, "--out", str(png)],
                        capture_output=True, text=True, check=False, timeout=120)
-    assert r.returncode == 2 and r.stdout == "" and not png.exists()
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and str(none) in lines[0], r.stderr
+    assert r.returncode == 2 and r.stdout == "" and not png.exists(), r.stderr
+    named = "--all-pressures" if case == "all_pressures_alone" else str(curves)
+    assert named in r.stderr.strip().splitlines()[-1], r.stderr
 
 
 # ---- examples/mf61_longitudinal.py ------------------------------------------------------------------------
