@@ -23,7 +23,7 @@ from jtire.cli import main
 from jtire.config import load_run_config
 
 from .conftest import COARSE_SET, REPO, SOLVER_SET, ok
-from .test_tutorial_tir import read_back_errors
+from .test_tutorial_tir_curves import read_back_errors
 
 README = REPO / "README.md"
 DOCS = sorted((REPO / "docs").rglob("*.md"))  # the README's pages and the site's tutorials: their commands too
@@ -64,7 +64,7 @@ COVERED = {
     r"python examples/mf61_lateral\.py runs/characterize/tire\.tir --out runs/fy_alpha\.png":
         "test_tutorial_tir::test_tutorial_tir_commands",
     r"python examples/mf61_lateral\.py runs/characterize/tire\.tir --curves runs/characterize/characterization\.json "
-    r"--out runs/fy_curves\.png": "test_tutorial_tir::test_tutorial_lateral_curves_command",
+    r"--out runs/fy_curves\.png": "test_tutorial_tir_curves::test_tutorial_lateral_curves_command",
     r"python examples/mf61_longitudinal\.py runs/characterize/tire\.tir --curves runs/characterize/characterization\.json "
     r"--out runs/fx_kappa\.png": "test_tutorial_tir::test_tutorial_longitudinal_command",
     r"jtire reproduce(( --quick)? --out runs/study(_quick)?)?": "test_readme_workflows::test_reproduce_quick",

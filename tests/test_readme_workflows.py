@@ -9,7 +9,7 @@ import pytest
 
 from .conftest import REPO
 from .test_readme_commands import QUICK_SIM, jtire
-from .test_tutorial_tir import read_back_errors
+from .test_tutorial_tir_curves import read_back_errors
 
 
 # ---- the whole study, a user's own tire ---------------------------------------------------------------
