@@ -128,11 +128,11 @@ def lateral(c, fz, alpha, dpi=0.0):
     svy = fz * (c["PVY1"] + c["PVY2"] * dfz) * c["LVY"] * lmuy_prime             # (4.E29)
     ay = a_star + shy                                                            # (4.E20)
     cy = c["PCY1"] * c["LCY"]                                                    # (4.E21)
-    mu_p = 1 + c.get("PPY3", 0.0) * dpi + c.get("PPY4", 0.0) * dpi**2
+    mu_p = 1 + c["PPY3"] * dpi + c["PPY4"] * dpi**2
     dy = (c["PDY1"] + c["PDY2"] * dfz) * mu_p * c["LMUY"] * fz                   # (4.E22), (4.E23)
     ey = np.minimum((c["PEY1"] + c["PEY2"] * dfz) * (1 - c["PEY3"] * np.sign(ay)) * c["LEY"], 1.0)  # (4.E24)
-    ky = (c["PKY1"] * fz0 * (1 + c.get("PPY1", 0.0) * dpi)
-          * np.sin(c["PKY4"] * np.arctan(fz / (c["PKY2"] * (1 + c.get("PPY2", 0.0) * dpi) * fz0))) * c["LKY"])  # (4.E25)
+    ky = (c["PKY1"] * fz0 * (1 + c["PPY1"] * dpi)
+          * np.sin(c["PKY4"] * np.arctan(fz / (c["PKY2"] * (1 + c["PPY2"] * dpi) * fz0))) * c["LKY"])  # (4.E25)
     by = ky / (cy * dy + np.where(cy * dy >= 0, 1e-12, -1e-12))                  # (4.E26)
     fy = dy * np.sin(cy * np.arctan(by * ay - ey * (by * ay - np.arctan(by * ay)))) + svy          # (4.E19)
     return {"fy": fy, "ky": ky, "dy": dy, "by": by, "cy": cy, "shy": shy, "svy": svy, "dfz": dfz,
@@ -148,7 +148,7 @@ def aligning(c, fz, alpha, dpi=0.0):
     ar = p["a_star"] + p["shy"] + p["svy"] / ky                                  # (4.E37), (4.E38)
     bt = (c["QBZ1"] + c["QBZ2"] * dfz + c["QBZ3"] * dfz**2) * c["LKY"] / c["LMUY"]  # (4.E40)
     ct = c["QCZ1"]                                                               # (4.E41)
-    dt = (fz * (c["UNLOADED_RADIUS"] / p["fz0"]) * (c["QDZ1"] + c["QDZ2"] * dfz) * (1 - c.get("PPZ1", 0.0) * dpi)
+    dt = (fz * (c["UNLOADED_RADIUS"] / p["fz0"]) * (c["QDZ1"] + c["QDZ2"] * dfz) * (1 - c["PPZ1"] * dpi)
           * c["LTR"])                                                            # (4.E42), (4.E43)
     et = np.minimum((c["QEZ1"] + c["QEZ2"] * dfz + c["QEZ3"] * dfz**2)
                     * (1 + c["QEZ4"] * (2 / np.pi) * np.arctan(bt * ct * at)), 1.0)   # (4.E44)

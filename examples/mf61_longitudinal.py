@@ -50,12 +50,12 @@ def longitudinal(c, fz, kappa, dpi=0.0):
     shx = (c["PHX1"] + c["PHX2"] * dfz) * c["LHX"]                               # (4.E17)
     kx = kappa + shx                                                             # (4.E10)
     cx = c["PCX1"] * c["LCX"]                                                    # (4.E11)
-    mu_p = 1 + c.get("PPX3", 0.0) * dpi + c.get("PPX4", 0.0) * dpi**2
+    mu_p = 1 + c["PPX3"] * dpi + c["PPX4"] * dpi**2
     dx = (c["PDX1"] + c["PDX2"] * dfz) * mu_p * c["LMUX"] * fz                   # (4.E12), (4.E13)
     ex = np.minimum((c["PEX1"] + c["PEX2"] * dfz + c["PEX3"] * dfz**2) * (1 - c["PEX4"] * np.sign(kx)) * c["LEX"],
                     1.0)                                                         # (4.E14)
     kxk = (fz * (c["PKX1"] + c["PKX2"] * dfz) * np.exp(c["PKX3"] * dfz)
-           * (1 + c.get("PPX1", 0.0) * dpi + c.get("PPX2", 0.0) * dpi**2) * c["LKX"])  # (4.E15)
+           * (1 + c["PPX1"] * dpi + c["PPX2"] * dpi**2) * c["LKX"])  # (4.E15)
     bx = kxk / (cx * dx + np.where(cx * dx >= 0, 1e-12, -1e-12))                 # (4.E16)
     svx = fz * (c["PVX1"] + c["PVX2"] * dfz) * c["LVX"] * lmux_prime             # (4.E18)
     fx = dx * np.sin(cx * np.arctan(bx * kx - ex * (bx * kx - np.arctan(bx * kx)))) + svx  # (4.E9)

@@ -100,18 +100,14 @@ def test_tutorial_lateral_curves_command(tmp_path):
     assert (tmp_path / "runs" / "fy_curves.png").stat().st_size > 40_000
 
 
-def test_lateral_curves_are_compared_in_iso_signs(script, tir_path, tmp_path):
+def test_lateral_curves_are_compared_in_iso_signs(script, tir_path):
     """The comparison can fail: the same curves with the SAE-to-ISO turn left out (F_y and M_z flipped
     as a reader that forgot the axes would see them) miss by about twice the peak, and a curve of
     another tire (F_y scaled by 0.9) by 10 % of the peak over 0-8 deg at most."""
-    import json
-
-    char = json.loads((tir_path.parent / "characterize" / "characterization.json").read_text())
-    c, _ = script.coefficients(tir_path, script.parse_tir(tir_path))
-    nompres = script.parse_tir(tir_path)["OPERATING_CONDITIONS"]["NOMPRES"][1]
-    path = tmp_path / "c.json"
-    path.write_text(json.dumps(char))
-    sims = script.simulated_curves(path, nompres)
+    tir = script.parse_tir(tir_path)
+    c, _ = script.coefficients(tir_path, tir)
+    nompres = tir["OPERATING_CONDITIONS"]["NOMPRES"][1]
+    sims = script.simulated_curves(tir_path.parent / "characterize" / "characterization.json", nompres)
     assert len(sims) == len(synthetic.LOADS_KG)
 
     def worst(curves, sign=1.0, scale=1.0):
