@@ -18,6 +18,7 @@ from pathlib import Path
 from . import batch, results
 from . import units as U
 from .config import parse_solver, read_tire_file, read_toml, validate_table
+from .schema import Field
 from .errors import ConfigError
 from .fingerprint import claim_folder, code_version
 from .io import check_writable
@@ -26,7 +27,10 @@ DEFAULT_EXPERIMENTS = ("footprint", "vertical_stiffness", "drum_cleat", "drop_te
                        "sidewall_translation", "sidewall_camber", "lateral_stiffness", "cornering", "rolling_resistance",
                        "sidewall_longitudinal")
 GRID_SCHEMA = {**results.GRID_SCHEMA, **results.RATED_SCHEMA}
-TOP_KEYS = {"description", "tire_file", "experiments", "grid", "solver"}
+TOP_KEYS = {"description", "tire_file", "experiments", "grid", "solver", "validation"}
+# the rigid ring's validation against the shell (`jtire.validate`): the shell's slip step resolves the force's
+# build-up over a short light-load patch only from 4 contact points per segment on (docs/rigid-ring.md, Validation)
+VALIDATION_SCHEMA = {"step_contact_subpoints": Field(int, 1, 1, 8, 8)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,6 +46,7 @@ class Plan:
     rated: dict
     solver: dict
     tables: dict = dataclasses.field(default_factory=dict)  # experiment name -> its validated table (SI)
+    validation: dict = dataclasses.field(default_factory=lambda: {"step_contact_subpoints": 8})
 
 
 def load_plan(path, tire_file=None, overrides=()) -> Plan:
@@ -101,7 +106,8 @@ def load_plan(path, tire_file=None, overrides=()) -> Plan:
     if not any(abs(c["load_N"] - rated["load_N"]) < 1e-6 and abs(c["pressure_Pa"] - rated["pressure_Pa"]) < 1e-3
                for c in conditions):
         raise ConfigError("grid.rated_load_kg, grid.rated_pressure_psi: must be one of the grid's conditions")
-    return Plan(path, tire, tire_path, exps, conditions, tuple(g["pressures_psi"]), rated, solver, tables)
+    validation = validate_table(raw.get("validation", {}), VALIDATION_SCHEMA, "validation")
+    return Plan(path, tire, tire_path, exps, conditions, tuple(g["pressures_psi"]), rated, solver, tables, validation)
 
 
 def experiment_conditions(plan: Plan, exp) -> list:

@@ -48,7 +48,8 @@ def _sets(items) -> list:
 def stages(out: Path, quick: bool) -> list:
     """The chain's stages for output folder `out`."""
     cal = config_path("calibration", "study_quick.toml" if quick else "study.toml")
-    char_small = _sets((*QUICK_MESH, *QUICK_SOLVER, "grid.loads_kg=[4625.0]", "grid.pressures_psi=[120.0]"))
+    char_small = _sets((*QUICK_MESH, *QUICK_SOLVER, "grid.loads_kg=[4625.0]", "grid.pressures_psi=[120.0]",
+                        "validation.step_contact_subpoints=2"))  # a test of the chain: the tire's own contact
     return [
         Stage("data", "Measured test-track and sandbox data, their fits (chapter 3)", ("data", "--out", str(out / "data"))),
         Stage("compete", "Optimizer competition on the soil block (Table 4-3)",

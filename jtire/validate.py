@@ -123,24 +123,21 @@ def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ, lateral="ring", cont
     return out
 
 
-# contact points per segment of the shell's slip step (at least; the tire's own when it has more): the
-# force's build-up over a short light-load patch is resolved only from 4 on (docs/rigid-ring.md, Validation)
-STEP_CONTACT_SUBPOINTS = 8
-
-
-def step_tire(tire):
-    """The tire spec the shell's slip step runs on: `tire` with >= STEP_CONTACT_SUBPOINTS contact points."""
-    return dataclasses.replace(tire, contact_subpoints=max(tire.contact_subpoints, STEP_CONTACT_SUBPOINTS))
+def step_tire(plan):
+    """The tire spec the shell's slip step runs on: the plan's tire with at least its config's
+    `validation.step_contact_subpoints` contact points per segment (the tire's own when it has more)."""
+    n = plan.validation["step_contact_subpoints"]
+    return dataclasses.replace(plan.tire, contact_subpoints=max(plan.tire.contact_subpoints, n))
 
 
 def slip_steps(char_dir, plan, conds, slip_step_table=None, batch_size=1, on_case=None) -> list:
-    """The slip-angle step at each condition (SI dicts), on `step_tire(plan.tire)`, resumed from
+    """The slip-angle step at each condition (SI dicts), on `step_tire(plan)`, resumed from
     DIR/validation. Returns one entry per condition: its ExperimentResult (read back from its folder)
     or its error message (str). on_case(name or None, n_done, n_total): at the start (None) and as
     each condition is saved (the CLI draws a progress bar with it)."""
     from .experiments import REGISTRY
 
-    tire = step_tire(plan.tire)
+    tire = step_tire(plan)
     exp = REGISTRY["slip_step"].from_table(_step_table(slip_step_table), _protocol(plan), tire)
     return _resumed(Path(char_dir) / "validation", "slip_step", exp, plan, conds, batch_size, on_case, tire=tire)
 

@@ -42,7 +42,7 @@ def case_files(out):
 
 # ---- simulations on a local cluster (coarse ring) --------------------------------------------------------
 @pytest.fixture(scope="module")
-def default_sweeps(tmp_path_factory, e01_singles):
+def default_sweeps(tmp_path_factory):
     """The two sweeps on the default runner (this process): static and transient E01."""
     base = tmp_path_factory.mktemp("default")
     assert jtire("sweep", *SWEEP, "--out", base / "static") == 0

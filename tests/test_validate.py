@@ -203,30 +203,47 @@ def test_resume_runs_nothing_finished_and_other_settings_refuse(plan_and_folder,
 
 
 def test_slip_step_runs_on_the_finer_contact_and_its_folder_says_so(plan_and_folder, monkeypatch):
-    """The shell's slip step runs on the tire with STEP_CONTACT_SUBPOINTS contact points per segment
-    (the default tire has 2), everything else the tire's; the steady references on the tire as it is;
-    the step's folder records the tire it ran on, so a folder made on the coarser contact refuses."""
+    """The shell's slip step runs on the tire with the config's `validation.step_contact_subpoints`
+    contact points per segment (default 8; the default tire has 2), everything else the tire's; the
+    steady references on the tire as it is; the step's folder records the tire it ran on, so a folder
+    made on the coarser contact refuses."""
     import dataclasses
     import json
 
-    from jtire.validate import STEP_CONTACT_SUBPOINTS, step_tire
+    from jtire.validate import step_tire
 
     plan, folder = plan_and_folder
     fake_runs(monkeypatch)
     specs = []
     monkeypatch.setattr("jtire.tire.make_tire", specs.append)
     validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
-    assert plan.tire.contact_subpoints == 2 < STEP_CONTACT_SUBPOINTS
-    assert specs[0] == dataclasses.replace(plan.tire, contact_subpoints=STEP_CONTACT_SUBPOINTS)  # the step
+    n = plan.validation["step_contact_subpoints"]
+    assert plan.tire.contact_subpoints == 2 < n == 8
+    assert specs[0] == dataclasses.replace(plan.tire, contact_subpoints=n)  # the step
     assert len(specs) > 1 and all(s == plan.tire for s in specs[1:])  # the steady references
     saved = json.loads((folder / "validation" / "settings.json").read_text())
-    assert saved["tire"]["contact_subpoints"] == STEP_CONTACT_SUBPOINTS
-    finer = dataclasses.replace(plan.tire, contact_subpoints=STEP_CONTACT_SUBPOINTS)
-    assert step_tire(finer) == finer
+    assert saved["tire"]["contact_subpoints"] == n
+    finer = dataclasses.replace(plan.tire, contact_subpoints=n)
+    assert step_tire(dataclasses.replace(plan, tire=finer)) == finer  # never coarser than the tire's own
+    assert step_tire(dataclasses.replace(plan, validation={"step_contact_subpoints": 1})) == plan.tire
     saved["tire"]["contact_subpoints"] = 2  # a folder the coarser contact made
     (folder / "validation" / "settings.json").write_text(json.dumps(saved))
     with pytest.raises(ConfigError, match="holds results made with other settings.*contact_subpoints"):
         validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
+
+
+def test_the_steps_contact_is_a_config_field(tmp_path):
+    """`validation.step_contact_subpoints` comes from the characterization config (`--set`), in 1-8;
+    out of range or misspelt is one ConfigError line naming it."""
+    from jtire.characterize import load_plan
+
+    cfg = REPO / "configs" / "characterize.toml"
+    assert load_plan(cfg).validation == {"step_contact_subpoints": 8}
+    assert load_plan(cfg, overrides=["validation.step_contact_subpoints=2"]).validation["step_contact_subpoints"] == 2
+    with pytest.raises(ConfigError, match="validation.step_contact_subpoints"):
+        load_plan(cfg, overrides=["validation.step_contact_subpoints=9"])
+    with pytest.raises(ConfigError, match="validation.step_subpoints"):
+        load_plan(cfg, overrides=["validation.step_subpoints=2"])
 
 
 def test_characterize_reports_a_failed_step_as_an_error(plan_and_folder, monkeypatch, capsys):
