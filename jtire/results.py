@@ -62,6 +62,11 @@ def steady_reference_folder(speed) -> str:
     return f"steady_{speed:g}_m_s"
 
 
+# DIR/validation/<this>/<case>: E09's push on the rubber's storage moduli at the shell's lateral frequency
+# (`validate.lateral_storage_references`), one folder per condition
+LATERAL_STORAGE = "lateral_storage"
+
+
 def cases_dir(root, experiment: str | None = None) -> Path:
     """DIR/cases (a sweep) or DIR/<experiment>/cases (a characterization)."""
     return Path(root) / "cases" if experiment is None else Path(root) / experiment / "cases"

@@ -194,6 +194,46 @@ def steady_references(char_dir, plan, conds, slip_step_table=None, batch_size=1,
     return out
 
 
+def storage_tire(tire, f_hz):
+    """`tire` (a TireSpec) with every part's four moduli and the tread's E and G at their storage modulus
+    E'(f_hz) of the Prony series (`materials.dynamic_modulus`): the rubber a vibration at f_hz sees. The
+    rigid ring's springs come from static pushes, i.e. from the long-term moduli."""
+    from .materials import dynamic_modulus
+
+    tau = np.asarray(tire.relaxation_times, float)
+    parts = {}
+    for name, p in tire.parts.items():
+        s = float(dynamic_modulus(p["loss"], tau, f_hz)[1])
+        parts[name] = p | {k: p[k] * s for k in ("E_meridional", "E_circumferential", "G_shear", "E_bending")}
+    st = float(dynamic_modulus(tire.tread_loss, tau, f_hz)[1])
+    return dataclasses.replace(tire, parts=parts, tread_E=tire.tread_E * st, tread_G=tire.tread_G * st)
+
+
+def lateral_storage_references(char_dir, plan, conds, freqs, on_case=None) -> list:
+    """Per condition, E09's static push (the characterization's table, no release) on `storage_tire` at
+    the shell's lateral release frequency `freqs[i]` (Hz; None: not run): how much the rubber's rate
+    stiffening raises k_l at the frequency the ring's lateral mode is compared at. Resumed from
+    DIR/validation/<results.LATERAL_STORAGE>/<case>, one folder per condition (its own tire)."""
+    from .config import validate_table
+    from .experiments import REGISTRY
+
+    table = dict(plan.tables.get("lateral_stiffness") or
+                 validate_table({}, REGISTRY["lateral_stiffness"].schema, "lateral_stiffness"))
+    table |= {"decay_s": 0.0, "method": "static"}
+    todo = [(i, c, f) for i, (c, f) in enumerate(zip(conds, freqs)) if f]
+    out = [None] * len(conds)
+    if on_case is not None:
+        on_case(None, 0, len(todo))
+    for n, (i, c, f) in enumerate(todo):
+        tire = storage_tire(plan.tire, f)
+        exp = REGISTRY["lateral_stiffness"].from_table(table, _protocol(plan), tire)
+        folder = Path(char_dir) / "validation" / results.LATERAL_STORAGE / results.case_name(0, c)
+        out[i] = _resumed(folder, "lateral_stiffness", exp, plan, [c], 1, None, tire=tire)[0]
+        if on_case is not None:
+            on_case(results.case_name(0, c), n + 1, len(todo))
+    return out
+
+
 def _step_table(slip_step_table):
     from .config import validate_table
     from .experiments import REGISTRY
@@ -250,10 +290,12 @@ def _read_case(folder):
     return results.read_error(folder) or "not run"
 
 
-def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None, on_case=None, on_steady=None):
+def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None, on_case=None, on_steady=None,
+             on_lateral=None):
     """Compare ring and shell at `conditions` ((kg, psi) pairs of the grid). Returns a list of
     (condition dict, comparison rows, shell signals, ring signals, error of the slip step or None).
-    on_case, on_steady: progress of the slip steps and of the steady references (see slip_steps)."""
+    on_case, on_steady, on_lateral: progress of the slip steps, the steady references and the lateral
+    storage references (see slip_steps)."""
     from .rigid_ring import validation
     from .rigid_ring.table import read_characterization
 
@@ -261,10 +303,11 @@ def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None
     conds = [{"load_N": kg * U.G0, "pressure_Pa": psi * U.PSI} for kg, psi in conditions]
     steps = slip_steps(char_dir, plan, conds, slip_step_table, on_case=on_case)
     steady_references(char_dir, plan, conds, slip_step_table, on_case=on_steady)  # read back by the diagnosis
+    shells = [shell_metrics(char_dir, c["load_N"], c["pressure_Pa"]) for c in conds]
+    lateral_storage_references(char_dir, plan, conds, [m.get("lateral.f_Hz") for m, _ in shells], on_lateral)
     out = []
-    for c, st in zip(conds, steps):
+    for c, st, (shell, s_sig) in zip(conds, steps, shells):
         row = char.row(c["load_N"], c["pressure_Pa"])
-        shell, s_sig = shell_metrics(char_dir, c["load_N"], c["pressure_Pa"])
         error = st if isinstance(st, str) else None
         if error is None:
             m, sg = step_metrics(st)

@@ -232,6 +232,58 @@ def test_slip_step_runs_on_the_finer_contact_and_its_folder_says_so(plan_and_fol
         validate(folder, plan, DEFAULT_CONDITIONS, STEP_TABLE)
 
 
+def test_storage_tire_scales_the_rubber_by_its_storage_modulus(plan_and_folder):
+    """Every part's four moduli and the tread's E and G times E'(f)/K of their own loss
+    (materials.dynamic_modulus); thickness, loss, undertread and friction as they were; at 0 Hz the tire."""
+    from jtire.materials import dynamic_modulus
+    from jtire.validate import storage_tire
+
+    tire = plan_and_folder[0].tire
+    assert storage_tire(tire, 0.0) == tire
+    st = storage_tire(tire, 15.0)
+    tau = np.asarray(tire.relaxation_times)
+    for name, p in tire.parts.items():
+        s = float(dynamic_modulus(p["loss"], tau, 15.0)[1])
+        assert 1.05 < s < 1.5
+        for k in ("E_meridional", "E_circumferential", "G_shear", "E_bending"):
+            assert st.parts[name][k] == pytest.approx(s * p[k], rel=1e-12)
+        assert st.parts[name]["thickness"] == p["thickness"] and st.parts[name]["loss"] == p["loss"]
+    s = float(dynamic_modulus(tire.tread_loss, tau, 15.0)[1])
+    assert (st.tread_E, st.tread_G) == pytest.approx((s * tire.tread_E, s * tire.tread_G), rel=1e-12)
+    assert (st.undertread_E, st.friction, st.tread_loss) == (tire.undertread_E, tire.friction, tire.tread_loss)
+
+
+def test_lateral_storage_references_run_once_per_condition_with_a_frequency(plan_and_folder, monkeypatch):
+    """E09's static push (no release) on the storage tire at each condition's frequency, saved in its own
+    folder under validation/lateral_storage; a condition without a frequency is not run; a rerun reads
+    them back."""
+    from jtire import results
+    from jtire.validate import lateral_storage_references, storage_tire
+
+    plan, folder = plan_and_folder
+    conds = [{"load_N": kg * 9.81, "pressure_Pa": psi * 6894.757293168361} for kg, psi in DEFAULT_CONDITIONS]
+    ran, specs = [], []
+
+    def run(exp, tire, conditions, *a, on_result=None, **kw):
+        assert exp.name == "lateral_stiffness" and not exp.with_decay and exp.method == "static"
+        for i, c in enumerate(conditions):
+            ran.append(c)
+            on_result(i, ExperimentResult("lateral_stiffness", dict(c), {"k_l_N_per_m": 7.7e5}))
+
+    monkeypatch.setattr(batch, "run", run)
+    monkeypatch.setattr("jtire.tire.make_tire", specs.append)
+    out = lateral_storage_references(folder, plan, conds, [15.0, None, 13.5])
+    assert ran == [conds[0], conds[2]] and out[1] is None
+    assert specs == [storage_tire(plan.tire, 15.0), storage_tire(plan.tire, 13.5)]
+    assert [r.quantities["k_l_N_per_m"] for r in (out[0], out[2])] == [7.7e5, 7.7e5]
+    for c in (conds[0], conds[2]):
+        tail = results.case_name(0, c)
+        assert results.is_done(results.cases_dir(folder / "validation" / results.LATERAL_STORAGE / tail) / tail)
+    ran.clear()
+    again = lateral_storage_references(folder, plan, conds, [15.0, None, 13.5])
+    assert ran == [] and again[0].quantities == out[0].quantities
+
+
 def test_the_steps_contact_is_a_config_field(tmp_path):
     """`validation.step_contact_subpoints` comes from the characterization config (`--set`), in 1-8;
     out of range or misspelt is one ConfigError line naming it."""

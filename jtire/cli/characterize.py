@@ -103,7 +103,8 @@ def _validate(plan, out, say) -> tuple:
 
     try:
         res = validate(out, plan, conds, on_case=progress("validation slip steps"),
-                       on_steady=progress("validation steady references"))
+                       on_steady=progress("validation steady references"),
+                       on_lateral=progress("validation lateral storage references"))
     finally:
         for bar in bars.values():
             bar.close()
