@@ -46,7 +46,7 @@ class Plan:
     rated: dict
     solver: dict
     tables: dict = dataclasses.field(default_factory=dict)  # experiment name -> its validated table (SI)
-    validation: dict = dataclasses.field(default_factory=lambda: {"step_contact_subpoints": 8})
+    validation: dict = dataclasses.field(default_factory=lambda: {k: f.default for k, f in VALIDATION_SCHEMA.items()})
 
 
 def load_plan(path, tire_file=None, overrides=()) -> Plan:
