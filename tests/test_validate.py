@@ -258,10 +258,11 @@ def test_lateral_storage_references_run_once_per_condition_with_a_frequency(plan
     folder under validation/lateral_storage; a condition without a frequency is not run; a rerun reads
     them back."""
     from jtire import results
+    from jtire import units as U
     from jtire.validate import lateral_storage_references, storage_tire
 
     plan, folder = plan_and_folder
-    conds = [{"load_N": kg * 9.81, "pressure_Pa": psi * 6894.757293168361} for kg, psi in DEFAULT_CONDITIONS]
+    conds = [{"load_N": kg * U.G0, "pressure_Pa": psi * U.PSI} for kg, psi in DEFAULT_CONDITIONS]
     ran, specs = [], []
 
     def run(exp, tire, conditions, *a, on_result=None, **kw):
