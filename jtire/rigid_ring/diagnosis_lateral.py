@@ -2,7 +2,6 @@
 damping) and the slip step (steady F_y and M_z, relaxation length s63), against E10's measurement
 window. Each check takes the condition's context and the comparison row and returns (state, text)."""
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -56,8 +55,9 @@ def _lateral_f(cx, c):
             why = f" (its push failed: {err})" if err else ""
             return NONE, (ring + need + f" at these masses (the static k_l from E09's push; rate stiffening of the "
                           f"rubber is a candidate, not measured here{why}); " + red)
-        f_st = lateral_modes(dataclasses.replace(d, k_l=d.k_l * r, k_by=d.k_by * r, k_bgamma=d.k_bgamma * r,
-                                                 k_cy=d.k_cy * r), "ring")[0][0]
+        q = cx.row.q  # the three pushes' springs x r; k_cy follows from the §5 split as the ring's own
+        f_st = lateral_modes(cx.rederive(**{k: q[k] * r for k in ("k_l_N_per_m", "k_by_N_per_m",
+                                                                  "k_bgamma_Nm_per_rad")}), "ring")[0][0]
         txt = (ring + need + f"; the springs come from static pushes (the rubber's long-term moduli) and the shell "
                f"rings at {_n(c.shell, 'Hz')}, where the Prony series' storage modulus is higher: E09's push on the "
                f"storage moduli at that frequency gives k_l x {r:.4g}, and the ring variant with k_by, k_bgamma and "
