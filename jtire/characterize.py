@@ -18,10 +18,10 @@ from pathlib import Path
 from . import batch, results
 from . import units as U
 from .config import parse_solver, read_tire_file, read_toml, validate_table
-from .schema import Field
 from .errors import ConfigError
 from .fingerprint import claim_folder, code_version
 from .io import check_writable
+from .schema import Field
 
 DEFAULT_EXPERIMENTS = ("footprint", "vertical_stiffness", "drum_cleat", "drop_test", "inplane_rotation", "traction",
                        "sidewall_translation", "sidewall_camber", "lateral_stiffness", "cornering", "rolling_resistance",
