@@ -2,7 +2,8 @@
 characterization, E09, E07 and E08 pushed statically on the long-term moduli and on every part's and the
 tread's storage modulus at the shell's lateral release frequency (`validate.storage_tire`), and the ring
 variant's linear lateral mode with its springs from the static pushes, with all three scaled by E09's
-ratio (what the validation's diagnosis does), and with each spring from its own push (k_cy rederived).
+ratio (`rigid_ring.params.derive(..., lateral_springs="storage")` on the ratio `jtire characterize` measures),
+and with each spring from its own push (k_cy rederived).
 
     python benchmarks/lateral_storage.py runs/characterize            # its validation conditions
     python benchmarks/lateral_storage.py runs/characterize --condition 4625 120
@@ -67,7 +68,7 @@ def main(argv=None):
                     raise SystemExit(f"{name} at {kg:g} kg, {psi:g} psi: {r.error}")
                 k.append(r.quantities[key])
             ratio[key] = k[1] / k[0]
-        d = derive(row, char.tire)
+        d = derive(row, char.tire)  # the static pushes' springs
         r_l = ratio["k_l_N_per_m"]
         f_static = lateral_modes(d, "ring")[0][0]
         f_scaled = lateral_modes(dataclasses.replace(d, k_l=d.k_l * r_l, k_by=d.k_by * r_l,

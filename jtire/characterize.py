@@ -8,7 +8,9 @@ E13 once per pressure: the load does not enter; E10 at every slip angle of every
 E11 is sigma = k_f / k_l from E10 and E09 at each condition). Every case is saved the moment its batch
 returns (`DIR/<experiment>/cases/<case>/result.json`, `signals.csv`); `DIR/settings.json` holds
 everything that determines the numbers, so a killed run resumes with nothing recomputed and a rerun with
-other settings refuses.
+other settings refuses. Then E09's static push on the rubber's storage moduli at E09's release
+frequency, per condition (`lateral_springs`, DIR/lateral_storage/): the ring's lateral springs for its
+dynamics (`rigid_ring.params`).
 """
 
 import dataclasses
@@ -198,6 +200,40 @@ def total_cases(plan: Plan, out=None) -> tuple:
     return total, done
 
 
+def lateral_springs(plan: Plan, out, found: dict, on_case=None) -> list:
+    """E09's static push on the rubber's storage moduli at E09's own release frequency, at every grid
+    condition where E09 measured one (`validate.storage_pushes`, resumed from DIR/lateral_storage/<case>):
+    the ring's lateral springs for the dynamics, as E02's tangent is its vertical ones. Returns one result
+    (or error message, or None: not run) per grid condition. found: `run`'s results."""
+    from .validate import storage_pushes
+
+    freqs = [_e09_frequency(plan, found, c) for c in plan.conditions]
+    return storage_pushes(Path(out) / results.LATERAL_STORAGE, plan, plan.conditions, freqs, on_case)
+
+
+def _e09_frequency(plan: Plan, found: dict, cond) -> float | None:
+    """E09's release frequency (Hz) at a grid condition, from `run`'s results (None: no release fit)."""
+    exp = next((e for e in plan.experiments if e.name == "lateral_stiffness"), None)
+    if exp is None:
+        return None
+    for cc, r in zip(experiment_conditions(plan, exp), found.get(exp.name) or ()):
+        if r is not None and _same(cc, cond):
+            f = (r.get("quantities") or {}).get("f_d_fit_Hz")
+            return float(f) if f else None
+    return None
+
+
+def _same(a: dict, b: dict) -> bool:
+    return abs(a["load_N"] - b["load_N"]) < 1e-6 and abs(a["pressure_Pa"] - b["pressure_Pa"]) < 1e-6
+
+
+def _storage_quantities(plan: Plan, out: Path, found: dict, cond) -> dict:
+    """{k_l_storage_N_per_m, f_l_storage_Hz} at a grid condition from `lateral_springs`' folder ({}: none)."""
+    f = _e09_frequency(plan, found, cond)
+    folder = results.cases_dir(out / results.LATERAL_STORAGE / results.case_name(0, cond))
+    d = results.find_case(folder, cond["load_N"], cond["pressure_Pa"]) if f and folder.is_dir() else None
+    k = None if d is None else results.read_result(d)["quantities"].get("k_l_N_per_m")
+    return {"k_l_storage_N_per_m": float(k), "f_l_storage_Hz": f} if k else {}
 
 
 def tire_info(plan: Plan):
@@ -229,7 +265,7 @@ def tire_info(plan: Plan):
 def characterization(plan: Plan, out, found: dict):
     """The rigid-ring Characterization of the finished (or partial) run: one row per grid condition,
     quantities merged from every experiment at that condition (per-pressure ones by pressure), E11's
-    sigma = k_f / k_l, and E10's and E06's curves."""
+    sigma = k_f / k_l, `lateral_springs`' k_l on the storage moduli where run, and E10's and E06's curves."""
     from .rigid_ring.table import Characterization, row_from_results
 
     out = Path(out)
@@ -257,6 +293,7 @@ def characterization(plan: Plan, out, found: dict):
             q |= r["quantities"]
         if q.get("k_f_N_per_rad") and q.get("k_l_N_per_m"):
             parts.append({"quantities": {"sigma_m": q["k_f_N_per_rad"] / q["k_l_N_per_m"]}})
+        parts.append({"quantities": _storage_quantities(plan, out, found, c)})
         rows.append(row_from_results(c["load_N"], c["pressure_Pa"], parts, e10_signals=e10, e06_signals=e06,
                                      e06_surface=e06_surface))
     return Characterization(tire_info(plan), rows)

@@ -62,8 +62,8 @@ def steady_reference_folder(speed) -> str:
     return f"steady_{speed:g}_m_s"
 
 
-# DIR/validation/<this>/<case>: E09's push on the rubber's storage moduli at the shell's lateral frequency
-# (`validate.lateral_storage_references`), one folder per condition
+# DIR/<this>/<case> of a characterization: E09's push on the rubber's storage moduli at E09's release
+# frequency (`validate.storage_pushes`), one folder per condition: the ring's lateral springs
 LATERAL_STORAGE = "lateral_storage"
 
 

@@ -9,7 +9,9 @@ runs only what is missing or failed, and refuses a folder made with other settin
 no silent gap: its rows say "SHELL RUN FAILED" and the error is returned. The same shell is also
 solved in steady rolling (E10's method) at each step's speed and angle, into
 DIR/validation/steady_<v>_m_s/ (resumed alike): the reference the diagnosis splits the step's
-steady force against. Ring side:
+steady force against. The characterization's own lateral springs on the rubber's storage moduli
+(`storage_pushes`, E09's static push at its release frequency) are run here too, for `jtire characterize`.
+Ring side:
 `rigid_ring.params.derive` populates the ring from the same condition's table row and
 `rigid_ring.scenarios` runs the same inputs. `rigid_ring.validation.compare` judges every metric
 against its tolerance (stated up front there).
@@ -196,8 +198,8 @@ def steady_references(char_dir, plan, conds, slip_step_table=None, batch_size=1,
 
 def storage_tire(tire, f_hz):
     """`tire` (a TireSpec) with every part's four moduli and the tread's E and G at their storage modulus
-    E'(f_hz) of the Prony series (`materials.dynamic_modulus`): the rubber a vibration at f_hz sees. The
-    rigid ring's springs come from static pushes, i.e. from the long-term moduli."""
+    E'(f_hz) of the Prony series (`materials.dynamic_modulus`): the rubber a vibration at f_hz sees (a
+    static push sees the long-term moduli)."""
     from .materials import dynamic_modulus
 
     tau = np.asarray(tire.relaxation_times, float)
@@ -209,11 +211,11 @@ def storage_tire(tire, f_hz):
     return dataclasses.replace(tire, parts=parts, tread_E=tire.tread_E * st, tread_G=tire.tread_G * st)
 
 
-def lateral_storage_references(char_dir, plan, conds, freqs, on_case=None) -> list:
+def storage_pushes(root, plan, conds, freqs, on_case=None) -> list:
     """Per condition, E09's static push (the characterization's table, no release) on `storage_tire` at
-    the shell's lateral release frequency `freqs[i]` (Hz; None: not run): how much the rubber's rate
-    stiffening raises k_l at the frequency the ring's lateral mode is compared at. Resumed from
-    DIR/validation/<results.LATERAL_STORAGE>/<case>, one folder per condition (its own tire)."""
+    `freqs[i]` (Hz, E09's release frequency there; None: not run): k_l on the moduli the rubber shows at
+    the frequency the lateral mode rings at (`characterize.characterization` puts it in the row as
+    k_l_storage). Resumed from root/<case>, one folder per condition (each claimed with its own tire)."""
     from .config import validate_table
     from .experiments import REGISTRY
 
@@ -227,8 +229,8 @@ def lateral_storage_references(char_dir, plan, conds, freqs, on_case=None) -> li
     for n, (i, c, f) in enumerate(todo):
         tire = storage_tire(plan.tire, f)
         exp = REGISTRY["lateral_stiffness"].from_table(table, _protocol(plan), tire)
-        folder = Path(char_dir) / "validation" / results.LATERAL_STORAGE / results.case_name(0, c)
-        out[i] = _resumed(folder, "lateral_stiffness", exp, plan, [c], 1, None, tire=tire)[0]
+        out[i] = _resumed(Path(root) / results.case_name(0, c), "lateral_stiffness", exp, plan, [c], 1, None,
+                          tire=tire)[0]
         if on_case is not None:
             on_case(results.case_name(0, c), n + 1, len(todo))
     return out
@@ -290,12 +292,10 @@ def _read_case(folder):
     return results.read_error(folder) or "not run"
 
 
-def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None, on_case=None, on_steady=None,
-             on_lateral=None):
+def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None, on_case=None, on_steady=None):
     """Compare ring and shell at `conditions` ((kg, psi) pairs of the grid). Returns a list of
     (condition dict, comparison rows, shell signals, ring signals, error of the slip step or None).
-    on_case, on_steady, on_lateral: progress of the slip steps, the steady references and the lateral
-    storage references (see slip_steps)."""
+    on_case, on_steady: progress of the slip steps and the steady references (see slip_steps)."""
     from .rigid_ring import validation
     from .rigid_ring.table import read_characterization
 
@@ -304,7 +304,6 @@ def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None
     steps = slip_steps(char_dir, plan, conds, slip_step_table, on_case=on_case)
     steady_references(char_dir, plan, conds, slip_step_table, on_case=on_steady)  # read back by the diagnosis
     shells = [shell_metrics(char_dir, c["load_N"], c["pressure_Pa"]) for c in conds]
-    lateral_storage_references(char_dir, plan, conds, [m.get("lateral.f_Hz") for m, _ in shells], on_lateral)
     out = []
     for c, st, (shell, s_sig) in zip(conds, steps, shells):
         row = char.row(c["load_N"], c["pressure_Pa"])

@@ -31,28 +31,24 @@ def test_lateral_frequency_reduced_model_vs_belt_dofs(char, rated):
     assert x.state == dg.NONE
 
 
-def test_lateral_frequency_on_the_rubbers_storage_moduli(tmp_path, char, rated):
-    """The validation pushes the shell again on the rubber's storage moduli at the shell's lateral
-    frequency (validate.lateral_storage_references, DIR/validation/lateral_storage/<case>): the ring
-    variant with its lateral springs raised by that push's k_l ratio rings at sqrt(ratio) x its own
-    frequency (all springs x r, masses the same). When that reaches the shell's frequency the cause is
-    measured (FULL); a ratio of 1 explains nothing; no reference, the candidate is named, not measured."""
-    from jtire import results
-
+def test_lateral_frequency_on_the_rubbers_storage_moduli(char, rated):
+    """The row's k_l_storage (E09's push on the rubber's storage moduli, from `jtire characterize`): the
+    ring variant with its lateral springs x that ratio r rings at sqrt(r) x its own frequency (all springs
+    x r, masses the same); when that reaches the shell's frequency the cause is measured (FULL), and the
+    text says why the ring keeps the static springs (its sigma_c / r); a ratio of 1 explains nothing;
+    without the column, the candidate is named, not measured."""
     char, rated = with_row(char, rated, k_bgamma_Nm_per_rad=5.2e5, k_l_N_per_m=7.0e5)
     d = derive(rated, char.tire)
     f_ring = dg.lateral_modes(d, "ring")[0][0]
-    tail = results.case_name(0, {"load_N": rated.load_N, "pressure_Pa": rated.pressure_Pa})
-    root = tmp_path / "validation" / results.LATERAL_STORAGE
-    write_case(root, tail, rated, {"quantities": {"k_l_N_per_m": 1.08**2 * d.k_l}})
-    x = explain(char, rated, {"lateral.f_Hz": 1.08 * f_ring}, {"lateral.f_Hz": f_ring}, char_dir=tmp_path)["lateral.f_Hz"]
-    assert x.state == dg.FULL and "gives k_l x 1.166" in x.text and x.text.endswith("0.0 %)"), x.text  # sqrt(r) x f_ring, to round-off
-    other = tmp_path / "r1"
-    write_case(other / "validation" / results.LATERAL_STORAGE, tail, rated, {"quantities": {"k_l_N_per_m": d.k_l}})
-    x = explain(char, rated, {"lateral.f_Hz": 1.08 * f_ring}, {"lateral.f_Hz": f_ring}, char_dir=other)["lateral.f_Hz"]
-    assert x.state == dg.NONE and "gives k_l x 1," in x.text and "the rest is not established" in x.text
+    c_st, st = with_row(char, rated, k_l_storage_N_per_m=1.08**2 * 7.0e5, f_l_storage_Hz=15.0)
+    x = explain(c_st, st, {"lateral.f_Hz": 1.08 * f_ring}, {"lateral.f_Hz": f_ring})["lateral.f_Hz"]
+    assert x.state == dg.FULL and "gives k_l x 1.166" in x.text and "0.0 %)" in x.text, x.text  # sqrt(r) x f_ring
+    assert "sigma_c" in x.text and "15 Hz" in x.text
+    c_same, same = with_row(char, rated, k_l_storage_N_per_m=7.0e5, f_l_storage_Hz=15.0)
+    x = explain(c_same, same, {"lateral.f_Hz": 1.08 * f_ring}, {"lateral.f_Hz": f_ring})["lateral.f_Hz"]
+    assert x.state == dg.NONE and "gives k_l x 1," in x.text and "the rest is not established" in x.text, x.text
     x = explain(char, rated, {"lateral.f_Hz": 1.08 * f_ring}, {"lateral.f_Hz": f_ring})["lateral.f_Hz"]
-    assert x.state == dg.NONE and "not measured here" in x.text
+    assert x.state == dg.NONE and "no push on the storage moduli" in x.text
 
 
 # ------------------------------------------------------------------ slip-angle step

@@ -76,6 +76,41 @@ def test_k_cy_fallback_when_ill_conditioned(char):
     assert d.k_l_ring_rel_error == pytest.approx(k_ring / d.k_l - 1) and d.k_l_ring_rel_error < 0
 
 
+def test_lateral_springs_on_the_storage_moduli(char):
+    """A row with E09's push on the rubber's storage moduli (k_l_storage, `characterize.lateral_springs`):
+    the ratio r = k_l_storage / k_l is reported, the default springs stay the static pushes. With
+    lateral_springs="storage", k_by, k_bgamma and k_l are the static ones x r, so the series k_cy is x r
+    too and sigma_c / r; with every spring x r and the masses the same, the undamped lateral frequencies
+    are x sqrt(r). E09's static k_l stays in k_l_static and the .tir (static springs) is unchanged.
+    Another value is one ConfigError line."""
+    from jtire.rigid_ring import modes, tir
+    from jtire.rigid_ring.table import Characterization
+
+    row = char.rated_row()
+    d0 = derive(row, char.tire)
+    assert d0.lateral_storage_ratio is None and d0.k_l_static == d0.k_l and not d0.uses_storage
+    r = 1.08**2
+    st = dataclasses.replace(row, q=row.q | {"k_l_storage_N_per_m": r * d0.k_l, "f_l_storage_Hz": 15.1})
+    ds = derive(st, char.tire)
+    assert ds.lateral_storage_ratio == pytest.approx(r, rel=1e-12) and not ds.uses_storage
+    assert (ds.k_by, ds.k_l, ds.k_cy) == (d0.k_by, d0.k_l, d0.k_cy)
+    d = derive(st, char.tire, lateral_springs="storage")
+    assert d.uses_storage and "15.1 Hz" in d.lateral_spring_source
+    for k in ("k_by", "k_bgamma", "k_l", "k_cy"):
+        assert getattr(d, k) == pytest.approx(r * getattr(d0, k), rel=1e-12), k
+    assert d.k_l_static == d0.k_l and d.sigma_c == pytest.approx(d0.sigma_c / r, rel=1e-12)
+    assert (d.C_by, d.C_bgamma, d.C_l) == (d0.C_by, d0.C_bgamma, d0.C_l)  # dampers as identified
+
+    def undamped(x):
+        return [f for f, _ in modes.lateral_modes(dataclasses.replace(x, C_by=0.0, C_cy=0.0, C_bgamma=0.0), "ring")]
+    assert undamped(d) == pytest.approx([math.sqrt(r) * f for f in undamped(d0)], rel=1e-9)
+    swap = Characterization(char.tire, tuple(st if x is row else x for x in char.rows))
+    tirs = [{k: v for sec in tir.build(c)[0].values() for k, v, _ in sec} for c in (char, swap)]
+    assert tirs[1] == tirs[0]
+    with pytest.raises(ConfigError, match="lateral_springs = 'dynamic': must be one of static, storage"):
+        derive(st, char.tire, lateral_springs="dynamic")
+
+
 def test_structural_keys(char):
     d = derive(char.rated_row(), char.tire)
     s = d.structural()

@@ -253,13 +253,12 @@ def test_storage_tire_scales_the_rubber_by_its_storage_modulus(plan_and_folder):
     assert (st.undertread_E, st.friction, st.tread_loss) == (tire.undertread_E, tire.friction, tire.tread_loss)
 
 
-def test_lateral_storage_references_run_once_per_condition_with_a_frequency(plan_and_folder, monkeypatch):
+def test_storage_pushes_run_once_per_condition_with_a_frequency(plan_and_folder, monkeypatch):
     """E09's static push (no release) on the storage tire at each condition's frequency, saved in its own
-    folder under validation/lateral_storage; a condition without a frequency is not run; a rerun reads
-    them back."""
+    folder under DIR/lateral_storage; a condition without a frequency is not run; a rerun reads them back."""
     from jtire import results
     from jtire import units as U
-    from jtire.validate import lateral_storage_references, storage_tire
+    from jtire.validate import storage_pushes, storage_tire
 
     plan, folder = plan_and_folder
     conds = [{"load_N": kg * U.G0, "pressure_Pa": psi * U.PSI} for kg, psi in DEFAULT_CONDITIONS]
@@ -273,16 +272,53 @@ def test_lateral_storage_references_run_once_per_condition_with_a_frequency(plan
 
     monkeypatch.setattr(batch, "run", run)
     monkeypatch.setattr("jtire.tire.make_tire", specs.append)
-    out = lateral_storage_references(folder, plan, conds, [15.0, None, 13.5])
+    root = folder / results.LATERAL_STORAGE
+    out = storage_pushes(root, plan, conds, [15.0, None, 13.5])
     assert ran == [conds[0], conds[2]] and out[1] is None
     assert specs == [storage_tire(plan.tire, 15.0), storage_tire(plan.tire, 13.5)]
     assert [r.quantities["k_l_N_per_m"] for r in (out[0], out[2])] == [7.7e5, 7.7e5]
     for c in (conds[0], conds[2]):
         tail = results.case_name(0, c)
-        assert results.is_done(results.cases_dir(folder / "validation" / results.LATERAL_STORAGE / tail) / tail)
+        assert results.is_done(results.cases_dir(root / tail) / tail)
     ran.clear()
-    again = lateral_storage_references(folder, plan, conds, [15.0, None, 13.5])
+    again = storage_pushes(root, plan, conds, [15.0, None, 13.5])
     assert ran == [] and again[0].quantities == out[0].quantities
+
+
+def test_lateral_springs_push_each_condition_at_e09s_own_frequency(plan_and_folder, monkeypatch):
+    """`characterize.lateral_springs` pushes E09 on the storage tire at the release frequency E09 measured
+    at each grid condition (none where E09 has no result), into DIR/lateral_storage; `characterization`
+    puts that k_l and frequency in the condition's row, and the ring's lateral springs follow them."""
+    from jtire import characterize as ch
+    from jtire.rigid_ring.params import derive
+    from jtire.validate import storage_tire
+
+    plan, folder = plan_and_folder
+    freqs = [13.0 + 0.25 * i for i in range(len(plan.conditions))]
+    found = {"lateral_stiffness": [None if i == 4 else {"quantities": {"k_l_N_per_m": 7.0e5, "f_d_fit_Hz": f}}
+                                   for i, f in enumerate(freqs)]}
+    pushed = []
+
+    def run(exp, tire, conditions, *a, on_result=None, **kw):
+        for i, c in enumerate(conditions):
+            pushed.append((dict(c), tire))
+            on_result(i, ExperimentResult("lateral_stiffness", dict(c), {"k_l_N_per_m": 7.7e5}))
+
+    monkeypatch.setattr(batch, "run", run)
+    monkeypatch.setattr("jtire.tire.make_tire", lambda spec: spec)
+    out = ch.lateral_springs(plan, folder, found)
+    assert out[4] is None and len(pushed) == len(plan.conditions) - 1
+    assert [t for _, t in pushed] == [storage_tire(plan.tire, f) for i, f in enumerate(freqs) if i != 4]
+    pushed.clear()
+    char = ch.characterization(plan, folder, found)
+    assert pushed == []  # read back, not run again
+    for i, (c, row) in enumerate(zip(plan.conditions, char.rows)):
+        assert (row.load_N, row.pressure_Pa) == (c["load_N"], c["pressure_Pa"])
+        if i == 4:
+            assert "k_l_storage_N_per_m" not in row.q
+        else:
+            assert (row.q["k_l_storage_N_per_m"], row.q["f_l_storage_Hz"]) == (7.7e5, freqs[i])
+            assert derive(row, char.tire).lateral_storage_ratio == pytest.approx(1.1, rel=1e-12)
 
 
 def test_the_steps_contact_is_a_config_field(tmp_path):

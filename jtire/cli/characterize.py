@@ -27,6 +27,7 @@ def run_cli(args, say) -> int:
     from tqdm import tqdm
 
     from .. import characterize as ch
+    from .. import units as U
     from ..errors import CasesFailed, ConfigError
     from ..resources import config_path
     from ..rigid_ring.export import export
@@ -57,9 +58,24 @@ def run_cli(args, say) -> int:
     results = ch.run(plan, out, batch_size=args.batch, progress=progress, on_case=on_case)
     for bar in bars:
         bar.close()
-    walls["total_s"] = time.perf_counter() - t0
     for line in ch.case_notes(results):  # cases rerun on a finer ring, sweeps that stopped: which and why
         say(line)
+    storage_bar = []
+
+    def storage_progress(name, n_done, n_total):
+        if not storage_bar:
+            storage_bar.append(tqdm(total=n_total, initial=n_done, desc="lateral springs (storage moduli)", unit="case"))
+        else:
+            storage_bar[0].update(n_done - storage_bar[0].n)
+
+    try:
+        pushes = ch.lateral_springs(plan, out, results, on_case=storage_progress)
+    finally:
+        for bar in storage_bar:
+            bar.close()
+    failures += [f"lateral_storage at {c['load_N'] / U.G0:g} kg, {c['pressure_Pa'] / U.PSI:g} psi: {r}"
+                 for c, r in zip(plan.conditions, pushes) if isinstance(r, str)]
+    walls["total_s"] = time.perf_counter() - t0
     char = ch.characterization(plan, out, results)
     write_characterization(out, char)
     written, lines = export(char, out, tir_name="tire.tir", source=str(plan.path.name))
@@ -103,8 +119,7 @@ def _validate(plan, out, say) -> tuple:
 
     try:
         res = validate(out, plan, conds, on_case=progress("validation slip steps"),
-                       on_steady=progress("validation steady references"),
-                       on_lateral=progress("validation lateral storage references"))
+                       on_steady=progress("validation steady references"))
     finally:
         for bar in bars.values():
             bar.close()

@@ -11,27 +11,12 @@ from .. import results
 from .diagnosis_base import FULL, NONE, PARTIAL, _damping, _n, _p, _verdict, _within
 from .model import CONTACT
 from .modes import lateral_modes, string_step_s63
+from .params import derive
 
 
 def _lateral_zeta(cx, c):
     return _damping(cx, c, "C_l_Ns_per_m", "C_l_2p_Ns_per_m", "C_l_fit_Ns_per_m", "lateral.f_Hz",
                     "lateral_stiffness")
-
-
-
-def _storage_ratio(cx):
-    """(k_l of E09's push on the rubber's storage moduli at the shell's lateral frequency over the static
-    k_l, None) from the validation's reference (`validate.lateral_storage_references`); (None, its error
-    message or None) when there is none."""
-    if cx.char_dir is None or not cx.d.k_l:
-        return None, None
-    tail = results.case_name(0, {"load_N": cx.load_N, "pressure_Pa": cx.pressure_Pa})
-    folder = Path(cx.char_dir) / "validation" / results.LATERAL_STORAGE / tail
-    d = results.find_case(results.cases_dir(folder), cx.load_N, cx.pressure_Pa)
-    if d is None:
-        return None, results.read_error(results.cases_dir(folder) / tail)
-    k = results.read_result(d)["quantities"].get("k_l_N_per_m")
-    return (k / cx.d.k_l if k else None), None
 
 
 def _lateral_f(cx, c):
@@ -44,34 +29,40 @@ def _lateral_f(cx, c):
     if None in (d.k_by, d.k_cy, d.k_bgamma, d.C_by, d.C_cy, d.C_bgamma):
         return NONE, red + "; the ring variant's inputs (k_by, k_bgamma, k_cy) are missing"
     f_ring = lateral_modes(d, "ring")[0][0]
-    ring = (f"in the ring variant (belt y_b, gamma_b on k_by, k_bgamma and the tread k_cy; the same static k_l) the "
-            f"belt's {d.tire.m_b_kg:.4g} kg moves less than the rim and the mode is at {_n(f_ring, 'Hz')} "
-            f"({_p(f_ring / c.shell - 1)})")
+    ring = (f"in the ring variant (belt y_b, gamma_b on k_by, k_bgamma and the tread k_cy; the springs from "
+            f"{d.lateral_spring_source}) the belt's {d.tire.m_b_kg:.4g} kg moves less than the rim and the mode is at "
+            f"{_n(f_ring, 'Hz')} ({_p(f_ring / c.shell - 1)})")
     if _within(f_ring, c.ring, 0.02) and not _within(f_red, c.ring, 0.02):
         # the validation ran the ring variant: its linear mode is the metric; what is left is its stiffness
-        need = f"; the shell's frequency needs (f_shell/f_ring)^2 = {(c.shell / f_ring) ** 2:.3g} x the ring's stiffness"
-        r, err = _storage_ratio(cx)
-        if r is None:
-            why = f" (its push failed: {err})" if err else ""
-            return NONE, (ring + need + f" at these masses (the static k_l from E09's push; rate stiffening of the "
-                          f"rubber is a candidate, not measured here{why}); " + red)
-        q = cx.row.q  # the three pushes' springs x r; k_cy follows from the §5 split as the ring's own
-        f_st = lateral_modes(cx.rederive(**{k: q[k] * r for k in ("k_l_N_per_m", "k_by_N_per_m",
-                                                                  "k_bgamma_Nm_per_rad")}), "ring")[0][0]
-        txt = (ring + need + f"; the springs come from static pushes (the rubber's long-term moduli) and the shell "
-               f"rings at {_n(c.shell, 'Hz')}, where the Prony series' storage modulus is higher: E09's push on the "
-               f"storage moduli at that frequency gives k_l x {r:.4g}, and the ring variant with k_by, k_bgamma and "
-               f"k_cy raised by that ratio rings at {_n(f_st, 'Hz')} ({_p(f_st / c.shell - 1)})")
+        txt = ring + f"; the shell's frequency needs (f_shell/f_ring)^2 = {(c.shell / f_ring) ** 2:.3g} x its stiffness"
+        r = d.lateral_storage_ratio
+        if r is None or d.uses_storage:
+            why = ("" if r is not None else " (rate stiffening of the rubber is a candidate: this characterization has "
+                   "no push on the storage moduli)")
+            return NONE, txt + f" at these masses; not established{why}; " + red
+        st = derive(cx.row, d.tire, lateral_springs="storage")
+        f_st = lateral_modes(st, "ring")[0][0]
+        txt += (f"; the springs rest on the rubber's long-term moduli, the shell rings where the Prony series' "
+                f"storage modulus is higher: E09's push on the storage moduli at {_n(_storage_f(cx), 'Hz')} gives k_l x "
+                f"{r:.4g}, and with k_by, k_bgamma and k_l x that (k_cy follows) the ring rings at {_n(f_st, 'Hz')} "
+                f"({_p(f_st / c.shell - 1)}); the ring keeps the static springs because the same springs shorten "
+                f"its sigma_c from {_n(d.sigma_c, 'm')} to {_n(st.sigma_c, 'm')}, and the slip step's slower "
+                f"build-up sees the long-term moduli (measured: docs/rigid-ring.md); one linear spring cannot give "
+                f"both, a spring with a Maxwell branch would (not built)")
         state = _verdict(f_st, c.shell, c.ring, c.tolerance)
-        if state != FULL:
-            txt += "; the rest is not established"
-        return state, txt
+        return state, txt + ("" if state == FULL else "; the rest is not established")
     txt = "the validation's " + red + "; " + ring
     state = _verdict(f_ring, c.shell, c.ring, c.tolerance)
     if state == PARTIAL:
         txt += (f"; the remaining stiffness ratio (f_shell/f_variant)^2 = {(c.shell / f_ring) ** 2:.3g} is not "
-                f"established (rate stiffening of the sidewall rubber is a candidate)")
+                f"established" + (" (rate stiffening of the rubber is a candidate: no push on the storage moduli)"
+                                  if d.lateral_storage_ratio is None else ""))
     return state, txt
+
+
+def _storage_f(cx):
+    """The frequency (Hz) the row's storage moduli were taken at (E09's release there), or None."""
+    return cx.row.get("f_l_storage_Hz")
 
 
 def _speeds(cx):

@@ -25,6 +25,12 @@ Lateral tread spring (§5): 1/k_cy = 1/k_l - 1/k_by - r_b^2/k_bgamma (rim held i
   sigma_c = k_f / k_cy, C_cy = k_cy C_l / k_l. Ill-conditioned (a difference of compliances a few
   per cent apart): when 1/k_cy <= 0 or sigma_c falls outside [a/4, min(4 a, sigma)], the SWIFT
   choice sigma_c = a, k_cy = k_f / a is used and the ring's lateral stiffness error is reported.
+Lateral springs: E07-E09 push statically, on the rubber's long-term moduli; the lateral mode rings where
+  the Prony series' storage modulus is higher. The row's k_l_storage (E09's push on the storage moduli at
+  E09's release frequency) gives the ratio r = k_l_storage / k_l, always reported. With
+  lateral_springs="storage" k_by, k_bgamma and k_l are all taken x r (k_cy x r and sigma_c / r follow
+  from the split above): the mode's frequency, at the cost of the slip step's relaxation, which sees the
+  slower moduli (docs/rigid-ring.md); the default keeps the static pushes. k_l_static is E09's value.
 """
 
 import dataclasses
@@ -39,6 +45,7 @@ from .identify import finite as _ok
 from .table import ConditionRow, TireInfo
 
 SIGMA_C_RANGE = (0.25, 4.0)  # plausible sigma_c / a
+LATERAL_SPRINGS = ("static", "storage")  # which moduli the ring's lateral springs rest on (`derive`)
 
 
 def _f(x):
@@ -113,6 +120,9 @@ class Derived:
     damping_source: str | None = None  # how C_bz, C_vr were identified (or the fallback, and why)
     mz_curve: tuple | None = None  # (alpha SAE rad (n,), M_z SAE N m (n,)): E10's steady curve, odd, ascending
     ellips: tuple | None = None  # E03's tandem cam (l_s, a_e, b_e, c_e) (m, m, m, -); None: point contact
+    k_l_static: float | None = None  # E09's static k_l (k_l above is the ring's: x lateral_storage_ratio)
+    lateral_storage_ratio: float | None = None  # k_l on the storage moduli / static k_l (None: not measured)
+    lateral_spring_source: str | None = None  # which moduli the lateral springs rest on, and why
 
     def residual_deflection(self, force: float) -> float:
         """The residual spring's deflection (m) under a contact force (N): the root of
@@ -136,6 +146,11 @@ class Derived:
     def k_bx_measured(self) -> bool:
         """k_bx (and C_bx, or tau k_bx) from E13 rather than the isotropy assumption."""
         return (self.k_bx_source or "").startswith("E13")
+
+    @property
+    def uses_storage(self) -> bool:
+        """The lateral springs are E07-E09's x lateral_storage_ratio (derive's lateral_springs="storage")."""
+        return (self.lateral_spring_source or "").startswith("storage")
 
     def structural(self) -> dict:
         """FREQ_* (Hz) and DAMP_* (-) of §7, None where an input is missing."""
@@ -171,7 +186,11 @@ class Derived:
             raise ConfigError(f"{what} at {self.load_N:.0f} N / {self.pressure_Pa:.0f} Pa: missing {m}")
 
 
-def derive(row: ConditionRow, tire: TireInfo) -> Derived:
+def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "static") -> Derived:
+    """The derived quantities of one row. lateral_springs: "static" (E07-E09's pushes, the default) or
+    "storage" (all three x the row's k_l_storage / k_l when it has one; see the module docstring)."""
+    if lateral_springs not in LATERAL_SPRINGS:
+        raise ConfigError(f"lateral_springs = {lateral_springs!r}: must be one of {', '.join(LATERAL_SPRINGS)}")
     g = row.get
     fz = row.load_N
     r0 = tire.unloaded_radius_m
@@ -186,6 +205,17 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
         k_cx = k_k / a
     k_by, k_bgamma, k_l = g("k_by_N_per_m"), g("k_bgamma_Nm_per_rad"), g("k_l_N_per_m")
     k_f, k_m, c_l = g("k_f_N_per_rad"), g("k_m_Nm_per_rad"), g("C_l_Ns_per_m")
+    # E09's push on the storage moduli at its release frequency over its static push (measured, reported);
+    # "storage" applies it to all three pushes: the springs the lateral mode sees, not the slow build-up
+    k_l_static, k_ls = k_l, g("k_l_storage_N_per_m")
+    storage = k_ls / k_l if _ok(k_ls, k_l) and k_ls > 0 and k_l > 0 else None
+    if storage is not None and lateral_springs == "storage":
+        k_by, k_bgamma, k_l = (None if v is None else v * storage for v in (k_by, k_bgamma, k_l))
+        f_s = g("f_l_storage_Hz")
+        lat_src = (f"storage moduli at {f_s:.4g} Hz (E09's release): E07-E09's springs x {storage:.4g}" if _ok(f_s)
+                   else f"storage moduli: E07-E09's springs x {storage:.4g}")
+    else:
+        lat_src = None if k_l is None else "static pushes (the rubber's long-term moduli)"
     k_btheta = g("k_btheta_Nm_per_rad")
 
     rho = fz / k_sv if _ok(k_sv) else None
@@ -256,7 +286,8 @@ def derive(row: ConditionRow, tire: TireInfo) -> Derived:
         C_bz_B=times(tau, k_bz_b), C_vr_B=times(tau, k_vr_b), k_bx=k_bx, C_bx=c_bx, sigma=sigma,
         k_cy=k_cy, sigma_c=sigma_c, C_cy=c_cy, k_cy_source=src, k_l_ring=k_l_ring, k_l_ring_rel_error=k_l_err,
         C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src,
-        k_vt=k_t, **res, damping_source=split[2], mz_curve=mz_curve(row.curves), ellips=_ellips(row))
+        k_vt=k_t, **res, damping_source=split[2], mz_curve=mz_curve(row.curves), ellips=_ellips(row),
+        k_l_static=k_l_static, lateral_storage_ratio=storage, lateral_spring_source=lat_src)
 
 
 def _ellips(row) -> tuple | None:

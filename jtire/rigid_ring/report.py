@@ -150,6 +150,7 @@ def markdown(char: Characterization, plane: str) -> str:
     else:
         items.append(("k_cy source", lambda r, d: DASH if d.k_cy_source is None else
                       ("series" if d.k_cy_source.startswith("series") else "fallback sigma_c = a")))
+        items.append(("k_l' / k_l", lambda r, d: _fmt(d.lateral_storage_ratio)))
     for label, fn in items:
         for i, load in enumerate(loads):
             lines.append(f"| {label if i == 0 else ''} | {load / U.G0:.1f} | "
@@ -159,7 +160,9 @@ def markdown(char: Characterization, plane: str) -> str:
             "k_dv >= 4 k_vt) when valid, else B (k_bz = k_dv); the residual spring k_vr rho + k_vr2 rho^2 rests at "
             "F_z/k_sv. C_bz + C_vr from E03's belt-mode zeta, divided so the linear bounce has E04's in-contact "
             "zeta; else (and in the B columns) tau = C_tot / k_sv for both." if plane == "in" else
-            "k_cy from 1/k_l - 1/k_by - r_b^2/k_bgamma, or the fallback sigma_c = a when ill-conditioned.")
+            "k_cy from 1/k_l - 1/k_by - r_b^2/k_bgamma, or the fallback sigma_c = a when ill-conditioned. k_l' / k_l: "
+            "E09's push on the rubber's storage moduli at its release frequency over its static push (the ring's "
+            "springs stay the static pushes; docs/rigid-ring.md).")
     return f"### {title}\n\n" + "\n".join(lines) + f"\n\n{note} Damping: two-peak / fit (relative difference).\n"
 
 

@@ -151,15 +151,17 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
     put("VERTICAL_DAMPING", d0.C_tot, f"C_tot (E04) at {at}")
     put("BOTTOM_STIFF", None if d0.k_sv is None else 10 * d0.k_sv, "[A] 10 k_sv")
     put("LONGITUDINAL_STIFFNESS", d0.C_x, f"1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta at {at}")
-    put("LATERAL_STIFFNESS", d0.k_l, f"k_l (E09) at {at}")
-    if d0.k_l is not None and d0.a is not None:
-        put("YAW_STIFFNESS", d0.k_l * d0.a**2 / 3, "[A] brush estimate k_l a^2/3 (not measured)")
+    put("LATERAL_STIFFNESS", d0.k_l_static, f"k_l (E09's static push) at {at}")
+    if d0.k_l_static is not None and d0.a is not None:
+        put("YAW_STIFFNESS", d0.k_l_static * d0.a**2 / 3, "[A] brush estimate k_l a^2/3 (not measured)")
     for k, v in d0.structural().items():
         src = {"FREQ_LONG": "sqrt(k_bz/m_b)/2pi", "FREQ_LAT": "sqrt(k_by/m_b)/2pi", "FREQ_YAW": "sqrt(k_bgamma/I_bx)/2pi",
                "FREQ_WINDUP": "sqrt(k_btheta/I_by)/2pi", "DAMP_LONG": "C_bz/(2 sqrt(k_bz m_b))",
                "DAMP_LAT": "C_by/(2 sqrt(k_by m_b))", "DAMP_YAW": "C_bgamma/(2 sqrt(k_bgamma I_bx))",
                "DAMP_WINDUP": "C_btheta/(2 sqrt(k_btheta I_by))", "DAMP_RESIDUAL": "C_vr/k_vr"}[k]
         extra = f", vertical split {d0.variant_used}" if k in ("FREQ_LONG", "DAMP_LONG") else ""
+        if k in ("FREQ_LAT", "FREQ_YAW", "DAMP_LAT", "DAMP_YAW") and d0.lateral_spring_source:
+            extra += f", springs: {d0.lateral_spring_source}"
         if k in ("DAMP_LONG", "DAMP_RESIDUAL") and d0.damping_source:
             extra += f", dampers: {d0.damping_source}"
         put(k, v, f"{src} at {at}{extra}")
@@ -187,8 +189,8 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
                 f"{what} vs pressure at {fz0:.0f} N ({len(pts)} pressures)")
 
     pressure_law("k_sv", "PFZ1", "k_sv")
-    load_law("k_l", "PCFY1", "PCFY2", "k_l")
-    pressure_law("k_l", "PCFY3", "k_l")
+    load_law("k_l_static", "PCFY1", "PCFY2", "k_l")
+    pressure_law("k_l_static", "PCFY3", "k_l")
     load_law("C_x", "PCFX1", "PCFX2", "C_x")
     pressure_law("C_x", "PCFX3", "C_x")
     # contact patch: half length and half width against the static deflection rho = F_z / k_sv
