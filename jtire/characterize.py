@@ -9,8 +9,8 @@ E11 is sigma = k_f / k_l from E10 and E09 at each condition). Every case is save
 returns (`DIR/<experiment>/cases/<case>/result.json`, `signals.csv`); `DIR/settings.json` holds
 everything that determines the numbers, so a killed run resumes with nothing recomputed and a rerun with
 other settings refuses. Then E09's static push on the rubber's storage moduli at E09's release
-frequency, per condition (`lateral_springs`, DIR/lateral_storage/): the ring's lateral springs for its
-dynamics (`rigid_ring.params`).
+frequency, per condition (`lateral_springs`, DIR/lateral_storage/): how much stiffer the lateral springs
+are at the lateral mode than in a static push (the row's k_l_storage; `rigid_ring.params`).
 """
 
 import dataclasses
@@ -203,8 +203,8 @@ def total_cases(plan: Plan, out=None) -> tuple:
 def lateral_springs(plan: Plan, out, found: dict, on_case=None) -> list:
     """E09's static push on the rubber's storage moduli at E09's own release frequency, at every grid
     condition where E09 measured one (`validate.storage_pushes`, resumed from DIR/lateral_storage/<case>):
-    the ring's lateral springs for the dynamics, as E02's tangent is its vertical ones. Returns one result
-    (or error message, or None: not run) per grid condition. found: `run`'s results."""
+    the lateral springs the lateral mode sees (`rigid_ring.params.derive`'s lateral_springs="storage").
+    Returns one result (or error message, or None: not run) per grid condition. found: `run`'s results."""
     from .validate import storage_pushes
 
     freqs = [_e09_frequency(plan, found, c) for c in plan.conditions]
