@@ -288,7 +288,7 @@ def test_storage_pushes_run_once_per_condition_with_a_frequency(plan_and_folder,
 def test_lateral_springs_push_each_condition_at_e09s_own_frequency(plan_and_folder, monkeypatch):
     """`characterize.lateral_springs` pushes E09 on the storage tire at the release frequency E09 measured
     at each grid condition (none where E09 has no result), into DIR/lateral_storage; `characterization`
-    puts that k_l and frequency in the condition's row, and the ring's lateral springs follow them."""
+    puts that k_l and frequency in the condition's row, and `derive` reports their ratio to the static k_l."""
     from jtire import characterize as ch
     from jtire.rigid_ring.params import derive
     from jtire.validate import storage_tire
