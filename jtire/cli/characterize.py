@@ -60,18 +60,12 @@ def run_cli(args, say) -> int:
         bar.close()
     for line in ch.case_notes(results):  # cases rerun on a finer ring, sweeps that stopped: which and why
         say(line)
-    storage_bar = []
-
-    def storage_progress(name, n_done, n_total):
-        if not storage_bar:
-            storage_bar.append(tqdm(total=n_total, initial=n_done, desc="lateral springs (storage moduli)", unit="case"))
-        else:
-            storage_bar[0].update(n_done - storage_bar[0].n)
-
+    storage_bars = {}
     try:
-        pushes = ch.lateral_springs(plan, out, results, on_case=storage_progress)
+        on = _stage_bar(storage_bars, "lateral springs (storage moduli)")
+        pushes = ch.lateral_springs(plan, out, results, on_case=on)
     finally:
-        for bar in storage_bar:
+        for bar in storage_bars.values():
             bar.close()
     failures += [f"lateral_storage at {c['load_N'] / U.G0:g} kg, {c['pressure_Pa'] / U.PSI:g} psi: {r}"
                  for c, r in zip(plan.conditions, pushes) if isinstance(r, str)]
@@ -92,10 +86,22 @@ def run_cli(args, say) -> int:
     return 0
 
 
+def _stage_bar(bars: dict, desc: str):
+    """on_case(name, n_done, n_total) of a resumable stage: a progress bar `desc`, kept in `bars` (the caller
+    closes them), made at the first call (one step per condition, and speed for the steady references)."""
+    from tqdm import tqdm
+
+    def update(name, n_done, n_total):
+        if desc not in bars:
+            bars[desc] = tqdm(total=n_total, initial=n_done, desc=desc, unit="case")
+        else:
+            bars[desc].update(n_done - bars[desc].n)
+    return update
+
+
 def _validate(plan, out, say) -> tuple:
     """The rigid ring against the shell model at three grid conditions: table and figure. Returns
     (files written, failed shell runs as "validation/<condition>: error" lines)."""
-    from tqdm import tqdm
 
     from .. import units as U
     from ..io import atomic_write_text
@@ -108,18 +114,9 @@ def _validate(plan, out, say) -> tuple:
     from ..rigid_ring.table import read_characterization
 
     bars = {}
-
-    def progress(desc):
-        def update(name, n_done, n_total):  # one step per condition (and speed, for the steady references)
-            if desc not in bars:
-                bars[desc] = tqdm(total=n_total, initial=n_done, desc=desc, unit="case")
-            else:
-                bars[desc].update(n_done - bars[desc].n)
-        return update
-
     try:
-        res = validate(out, plan, conds, on_case=progress("validation slip steps"),
-                       on_steady=progress("validation steady references"))
+        res = validate(out, plan, conds, on_case=_stage_bar(bars, "validation slip steps"),
+                       on_steady=_stage_bar(bars, "validation steady references"))
     finally:
         for bar in bars.values():
             bar.close()

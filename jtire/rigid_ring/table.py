@@ -91,20 +91,18 @@ QUANTITIES = (
     _q("k_l_N_per_m", "k_l", "N/m", "E09", "total lateral stiffness (loaded, at the rim)", "out",
        display=("kN/m", 1e-3)),
     _q("C_l_Ns_per_m", "C_l", "N s/m", "E09", "total lateral damping", "out", True),
-    _q("k_l_storage_N_per_m", "k_l'", "N/m", "E09'", "k_l on the rubber's storage moduli at E09's release frequency "
-       "(the ring's lateral springs x k_l' / k_l)", "out", display=("kN/m", 1e-3)),
+    _q("k_l_storage_N_per_m", "k_l'", "N/m", "E09'", "k_l on the storage moduli at E09's release frequency", "out",
+       display=("kN/m", 1e-3)),
     _q("k_f_N_per_rad", "k_f", "N/rad", "E10", "cornering stiffness (SAE sign, > 0)", "out", display=("kN/rad", 1e-3)),
     _q("k_m_Nm_per_rad", "k_m", "N m/rad", "E10", "aligning-moment stiffness", "out", display=("kN m/rad", 1e-3)),
     _q("sigma_m", "sigma", "m", "E11", "lateral relaxation length k_f / k_l", "out", display=("mm", 1e3)),
 )
-BY_KEY = {q.key: q for q in QUANTITIES}
-# accepted but not tabulated: extra E01/E03/E04 outputs that tests and reports may use
+BY_KEY = {q.key: q for q in QUANTITIES}  # and below, accepted but not tabulated: extra outputs tests and reports use
 EXTRA_KEYS = ("deflection_m", "first_mode_fit_fn_Hz", "first_mode_xi", "k_dv_fit_N_per_m", "xi_in_contact_fit",
               "omega_n_in_contact_fit_rad_per_s",
               # E03's tandem cam (jtire.enveloping), fitted to its quasi-static crossing
               "ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order", "enveloping_fit_rms_height_m",
-              "enveloping_max_height_m",
-              "f_l_storage_Hz")  # the frequency k_l_storage's storage moduli are taken at (E09's release)
+              "enveloping_max_height_m", "f_l_storage_Hz")  # f_l_storage: where k_l_storage's moduli are taken
 CURVE_KEYS = ("slip_angle_deg", "lateral_force_N", "M_z_SAE_Nm", "F_z_N", "F_y_SAE_N", "F_x_N")
 CURVE_REQUIRED = ("slip_angle_deg", "lateral_force_N")
 SLIP_CURVE_KEYS = ("slip", "force_x_N", "force_z_N")

@@ -160,7 +160,7 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
                "DAMP_LAT": "C_by/(2 sqrt(k_by m_b))", "DAMP_YAW": "C_bgamma/(2 sqrt(k_bgamma I_bx))",
                "DAMP_WINDUP": "C_btheta/(2 sqrt(k_btheta I_by))", "DAMP_RESIDUAL": "C_vr/k_vr"}[k]
         extra = f", vertical split {d0.variant_used}" if k in ("FREQ_LONG", "DAMP_LONG") else ""
-        if k in ("FREQ_LAT", "FREQ_YAW", "DAMP_LAT", "DAMP_YAW") and d0.lateral_spring_source:
+        if k in ("FREQ_LAT", "FREQ_YAW", "DAMP_LAT", "DAMP_YAW") and d0.uses_storage:
             extra += f", springs: {d0.lateral_spring_source}"
         if k in ("DAMP_LONG", "DAMP_RESIDUAL") and d0.damping_source:
             extra += f", dampers: {d0.damping_source}"
