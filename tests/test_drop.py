@@ -104,6 +104,9 @@ def run_single_plan(tire, protocol, case, branches_of, mem0):
     return jax.tree_util.tree_map(lambda a: np.asarray(a)[0], out)
 
 
+# gate: its frictionless phase program is its own (~27 s cold here)
+@pytest.mark.slow
+@pytest.mark.gate
 def test_undamped_frictionless_drop_conserves_energy(coarse_tire, protocol, e01_grid):
     """The inflate and fall phases of E04 with every loss and the friction off."""
     base = coarse_tire.params
@@ -215,6 +218,9 @@ TOL_AT_REST_REL = 1e-3
 KE_AT_REST = 1e-3
 
 
+# gate: its 64-sample hold is a program of its own (~17 s cold here)
+@pytest.mark.slow
+@pytest.mark.gate
 def test_the_static_state_is_at_rest_in_the_dynamics(e09_release, coarse_tire, protocol):
     from jtire.experiments.loads import LEFT, RIM_YZ
 

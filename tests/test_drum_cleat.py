@@ -145,6 +145,9 @@ def belt_vertical_mode(tire, static_run, pressure, iterations=3):
     return f, float(share[k])
 
 
+# E03 compiles the suite's one drum program (~80 s cold here): its users run in the physics gate
+@pytest.mark.slow
+@pytest.mark.gate
 @pytest.mark.parametrize("fixture", ["e03", "e03_transient"])
 def test_first_mode_is_the_linear_vertical_belt_mode(fixture, request, e01_static, coarse_tire):
     """E03 (rolling, rim locked, the cleat's kick) rings at the tire's linear vertical belt mode: the
@@ -182,6 +185,8 @@ def test_first_mode_rises_with_pressure(spec, protocol, coarse_tire):
     assert np.isfinite(hi.quantities["k_dv_N_per_m"]) and hi.quantities["k_dv_N_per_m"] > 0
 
 
+@pytest.mark.slow
+@pytest.mark.gate
 def test_quasi_static_crossing_and_its_tandem_cam(e03):
     """E03's quasi-static crossing (the rim under the constant load, frictionless, the cleat stepped
     through the patch) and the tandem cam fitted to it. Invariants: the load is held at every level

@@ -138,7 +138,10 @@ def test_contact_energy_is_the_normal_force_potential(coarse_tire):
 
 # the rigid-belt border rows: no experiment solves rigid-belt statics yet (E05/E07/E08 holds are
 # transients), so that variant (~70 s of compilation) is a slow check
-@pytest.mark.parametrize("rigid_belt", [False, pytest.param(True, marks=pytest.mark.slow)])
+# both in the gate: each assembles and factors dense Jacobians of its own (~28 s cold here without the
+# rigid belt); the fast suite checks the block assembly through the solves that use it
+@pytest.mark.parametrize("rigid_belt", [pytest.param(False, marks=[pytest.mark.slow, pytest.mark.gate]),
+                                        pytest.param(True, marks=pytest.mark.slow)])
 def test_block_jacobian_and_solve_match_dense(coarse_tire, rigid_belt):
     """The coloured block assembly equals jax.jacfwd, and the block-cyclic banded solve equals a
     dense LU solve, with contact and friction (and with a rigid belt, whose border rows are then

@@ -158,6 +158,9 @@ def test_quick_conditions_are_SI():
     assert c[0]["pressure_Pa"] == pytest.approx(120 * U.PSI) and c[0]["load_N"] == pytest.approx(2312.5 * U.G0)
 
 
+# gate: a characterize subprocess of its own (~30 s cold here)
+@pytest.mark.slow
+@pytest.mark.gate
 def test_footprint_figure_from_a_characterization(tmp_path, capsys):
     """`jtire characterize` writes each footprint case's contact-pressure table, so Figure 5-2 draws
     from a characterization folder (--from) as every other figure does; the table integrates to the

@@ -266,6 +266,9 @@ def test_registry_and_configs_do_not_need_a_load():
         assert "load_N" not in rc.condition  # a load given in the file is ignored, never passed on
 
 
+# gate: E13's two pushes (~22 s here), with its quantity names (tests/test_quantity_names.py)
+@pytest.mark.slow
+@pytest.mark.gate
 def test_fore_aft_spring_is_the_vertical_spring(e13_runs, spec):
     """E13: k_bx from a fore-aft push equals the rigid belt's vertical spring k_bz by the tire's
     axisymmetry (no road, no gravity); the push moves the belt along its own axis only; the decay is a

@@ -218,6 +218,9 @@ def test_lossless_free_rolling_drags_only_by_its_sliding(coarse_tire, e12_steady
     assert 0 < drag < 0.1 * lossy
 
 
+# gate: each of the next two compiles a steady program of its own (~40 s cold here)
+@pytest.mark.slow
+@pytest.mark.gate
 def test_steady_state_is_path_independent(coarse_tire, e12_steady):
     """The steady state is unique: loaded in one level or in two (other intermediate states, other
     Newton paths), and with the static solver's refactoring after every shortened step instead of the
@@ -258,6 +261,8 @@ def test_e12_steady_energy_and_rolling_radius(e12_steady, e12, coarse_tire):
     assert 0.7 < q["rolling_resistance_from_power_N"] / t["rolling_resistance_from_power_N"] < 1.0
 
 
+@pytest.mark.slow
+@pytest.mark.gate
 def test_under_resolved_case_is_rerun_on_a_finer_ring(e12_steady, coarse_tire, protocol, spec, monkeypatch):
     """E12's own check refuses a result whose two readings differ by more than the tolerance
     (UnderResolved), and `batch.run` reruns that case on a ring with twice the segments, saying so.

@@ -39,6 +39,8 @@ def results(out):
     return sorted((out / "cases").glob("*/result.json"))
 
 
+# The three tests on this killed-and-resumed sweep (two `jtire sweep` processes, ~50 s cold here) run in the
+# physics gate; the fast suite keeps the in-process kill below and tests/test_kill_resume.py.
 @pytest.fixture(scope="module")
 def killed_and_resumed(tmp_path_factory, e01_singles):
     """Start the sweep, SIGKILL it as soon as its first case is written, run it again to the end.
@@ -62,6 +64,8 @@ def killed_and_resumed(tmp_path_factory, e01_singles):
     return out, done, again
 
 
+@pytest.mark.slow
+@pytest.mark.gate
 def test_killed_sweep_resumes_without_recomputing(killed_and_resumed):
     out, done, again = killed_and_resumed
     assert again.returncode == 0, again.stderr[-2000:]
@@ -76,6 +80,8 @@ def test_killed_sweep_resumes_without_recomputing(killed_and_resumed):
         assert d["checks"]["load_settled"] and d["quantities"]["contact_length_m"] > 0
 
 
+@pytest.mark.slow
+@pytest.mark.gate
 def test_finished_sweep_rerun_computes_nothing(killed_and_resumed, capsys):
     out, _, _ = killed_and_resumed
     before = {f: f.stat().st_mtime_ns for f in results(out)}
@@ -84,6 +90,8 @@ def test_finished_sweep_rerun_computes_nothing(killed_and_resumed, capsys):
     assert {f: f.stat().st_mtime_ns for f in results(out)} == before
 
 
+@pytest.mark.slow
+@pytest.mark.gate
 @pytest.mark.parametrize("other", [["--set", "solver.ke_tol_J=0.002"],  # other settings
                                    ["--set", "sweep.loads_kg=[2312.5, 4000.0]"],  # another grid
                                    ["--set", "tire.tread.friction=0.7"]])  # another tire
