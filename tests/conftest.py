@@ -8,10 +8,11 @@ whole session (test files share them). The fast suite uses:
     flat-road program, 1 case on 1 device   ("singles": E01, E02, E04, E09, E12, custom plans, CLI runs);
     the same on the second device           (grids case by case, side by side: `jtire sweep`'s default);
     flat-road program, 4 cases on 2 devices ("grids": the E01 grid, the E10 sweep);
-    flat-road program, 4 cases on 1 device  (the unsharded E01 grid: sharded = unsharded);
-    rigid-belt program, 1 case on 1 device  (E05, E07, E08, E13);
-    drum program, 1 case on 1 device        (E03, once).
-Anything else (the default mesh, other drum runs) is under @pytest.mark.slow.
+    rigid-belt program, 1 case on 1 device  (E05, E07, E08).
+The physics gate (`pytest -m gate`, beside the fast suite in CI) adds programs only its checks need: the
+flat-road program for 4 cases on 1 device (the unsharded E01 grid: sharded = unsharded), the drum
+program (E03, once), E13's pushes. Anything else (the default mesh, other drum runs) is under
+@pytest.mark.slow.
 
 Persistent compilation cache: ON, in the default folder (`jtire.cache`: $JTIRE_CACHE_DIR if set, else
 the user's cache folder; JTIRE_CACHE_DIR=off turns it off). The command-line tests and the

@@ -75,7 +75,7 @@ def test_grid_traces_the_phase_program_once(e01_grid):
         assert e01_grid.traces_added == 1
 
 
-def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01_singles, e02, e09, e04, e04_transient,
+def test_one_trace_per_structure_and_placement(e01_grid, e01_singles, e02, e09, e04, e04_transient,
                                                e09_release, e12, e10, sidewall_runs, sidewall_transient):
     """Every experiment, table, condition and batch size of one structure and placement shares one
     trace (and one compiled program per batch shape): only the first run of each group may trace (a
@@ -83,7 +83,7 @@ def test_one_trace_per_structure_and_placement(e01_grid, e01_grid_unsharded, e01
     here as a second trace). A transient started from a static state (E04, E09's release, the rigid
     belt's release: method "static") runs its phases on the same program, vmapped over its one case.
     E04's record (2.5 kHz) is longer than the other phases' N_SAVE samples: its own group."""
-    runs = [e01_grid, e01_grid_unsharded, *e01_singles, e02, e09, e04, e04_transient, e09_release, e12, e10,
+    runs = [e01_grid, *e01_singles, e02, e09, e04, e04_transient, e09_release, e12, e10,
             sidewall_transient, *[r for n in SIDEWALL for r in sidewall_runs[n].values()]]
     groups = {}
     for r in sorted(runs, key=lambda r: r.order):
@@ -120,15 +120,19 @@ def test_program_traces_is_the_phase_program_count():
 
 
 # ---- batches, shards --------------------------------------------------------------------------------
-def test_batch_equals_single_runs(e01_grid_unsharded, e01_singles):
-    """4 cases in one batch on one device = the 4 cases run one by one."""
-    assert_same_runs(e01_grid_unsharded.results, [s.results[0] for s in e01_singles])
+def test_batch_equals_single_runs(e01_grid, e01_singles):
+    """4 cases in one batch, 2 on each device, = the 4 cases run one by one."""
+    assert_same_runs(e01_grid.results, [s.results[0] for s in e01_singles])
 
 
-def test_sharded_equals_unsharded(e01_grid, e01_grid_unsharded):
-    """The same 4-case batch split over 2 devices = on one device."""
+# gate: the 4-case batch on one device is a program (and 2 traces) no fast test needs (~100 s here)
+@pytest.mark.slow
+@pytest.mark.gate
+def test_sharded_equals_unsharded(e01_grid, e01_grid_unsharded, e01_singles):
+    """The same 4-case batch split over 2 devices = on one device = the 4 single runs."""
     assert len(jax.devices()) >= 2, "jtire asks for one CPU device per core; this machine should have 2"
     assert_same_runs(e01_grid.results, e01_grid_unsharded.results)
+    assert_same_runs(e01_grid_unsharded.results, [s.results[0] for s in e01_singles])
 
 
 def test_case_by_case_side_by_side_is_the_single_runs(coarse_tire, e01_singles):

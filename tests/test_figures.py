@@ -11,7 +11,6 @@ import importlib.util
 import re
 import shutil
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
