@@ -136,10 +136,10 @@ def test_contact_energy_is_the_normal_force_potential(coarse_tire):
     np.testing.assert_allclose(np.asarray(g), np.asarray(r), rtol=0, atol=TOL_IDENTITY * float(jnp.max(jnp.abs(r))))
 
 
-# the rigid-belt border rows: no experiment solves rigid-belt statics yet (E05/E07/E08 holds are
-# transients), so that variant (~70 s of compilation) is a slow check
-# both in the gate: each assembles and factors dense Jacobians of its own (~28 s cold here without the
-# rigid belt); the fast suite checks the block assembly through the solves that use it
+# Gate (without the rigid belt, ~28 s cold here) and slow (with it, ~70 s): each compiles dense Jacobians
+# of its own. In the fast suite the block factorization is the Newton solves' preconditioner, where a
+# wrong block would slow or stop a solve, not change its answer; the implicit derivatives, which use it
+# as the Jacobian, are checked against central differences in the gate too.
 @pytest.mark.parametrize("rigid_belt", [pytest.param(False, marks=[pytest.mark.slow, pytest.mark.gate]),
                                         pytest.param(True, marks=pytest.mark.slow)])
 def test_block_jacobian_and_solve_match_dense(coarse_tire, rigid_belt):
