@@ -259,7 +259,8 @@ def tire_info(plan: Plan):
                     aspect_ratio=g.section_height / g.section_width, rated_load_N=plan.rated["load_N"],
                     rated_pressure_Pa=plan.rated["pressure_Pa"],
                     # the whole tire (the .tir's IXX, IYY): the belt as the ring takes it plus the rest
-                    tire_Iy_kgm2=I_by + own["nonbelt_Iy_kgm2"], tire_Ix_kgm2=I_bx + own["nonbelt_Ix_kgm2"])
+                    tire_Iy_kgm2=I_by + own["nonbelt_Iy_kgm2"], tire_Ix_kgm2=I_bx + own["nonbelt_Ix_kgm2"],
+                    relaxation_time_s=float(max(s.relaxation_times)))
 
 
 def characterization(plan: Plan, out, found: dict):

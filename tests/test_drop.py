@@ -169,6 +169,7 @@ def test_lateral_release_decay(fixture, request, spec):
     for key in ("C_l_Ns_per_m", "C_l_2p_Ns_per_m", "C_l_fit_Ns_per_m", "xi_fit"):
         assert np.isfinite(q[key]) and q[key] > 0, key
     assert q["xi_fit"] < XI_MAX
+    assert q["xi_l_fit"] == q["xi_fit"]  # the same fit under E09's own name (the rigid ring's tread damper)
     assert q["decay_mass_kg"] == wheel_mass(spec)  # M = m_wheel from the tire config
     assert c["release_settle_work_J"] == 0.0
     assert abs(c["release_final_level_minus_preload_m"]) < TOL_RETURN * q["lateral_deflection_m"]

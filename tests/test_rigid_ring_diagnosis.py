@@ -207,6 +207,22 @@ def test_damping_value_and_frequency_account_for_zeta(char, rated, metric, f_met
     assert r[metric].state == dg.NONE
 
 
+def test_lateral_zeta_with_the_tread_damper_from_the_release(char, rated):
+    """With E09's release zeta in the row the ring's linear release has it (C_cy identified from it): a
+    simulated ring that misses the shell is not explained by the damping value, and the text says where
+    C_cy came from and what its linearization gives."""
+    from jtire.rigid_ring.modes import lateral_modes
+
+    ch, row = with_row(char, rated, xi_l_fit=0.02)
+    d = derive(row, ch.tire)
+    f_r, z_r = lateral_modes(d, "ring")[0]
+    assert z_r == pytest.approx(0.02, rel=1e-9)
+    r = explain(ch, row, {"lateral.zeta": 0.02, "lateral.f_Hz": f_r}, {"lateral.zeta": 0.026, "lateral.f_Hz": f_r})
+    x = r["lateral.zeta"]
+    assert x.state == dg.NONE and "is set from this release (E09's release zeta 0.02" in x.text
+    assert "linear release has zeta 0.02 (+0.0 %" in x.text
+
+
 def test_drop_zeta_with_the_two_test_dampers(char, rated):
     """With C_bz, C_vr from E03 and E04 the ring's bounce has E04's in-contact zeta: a shell whose whole
     record decays x 0.8 slower than its in-contact part explains a ring x 1.25 above it; a shell whose

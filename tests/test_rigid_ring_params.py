@@ -65,6 +65,56 @@ def test_k_cy_series_compliance_reproduces_k_l(char):
         assert d.sigma == pytest.approx(d.k_f / d.k_l)
 
 
+def test_tread_damper_from_the_lateral_release(char):
+    """With E09's fitted release zeta in the row (xi_l_fit), C_cy is the tread damper that gives the
+    ring's linear lateral release that zeta beside E07's C_by and E08's C_bgamma: a C_cy put into a ring
+    comes back from the zeta it produces (bisection to 1e-9), and the release then has that zeta. A zeta
+    the sidewall's dampers alone exceed has no C_cy >= 0: the fallback k_cy C_l / k_l, named with the
+    range the ring spans. Without xi_l_fit, the fallback says so."""
+    from jtire.rigid_ring import modes
+
+    row = char.rated_row()
+    d0 = derive(row, char.tire)
+    assert "no E09 xi_l_fit" in d0.C_cy_source
+    for scale in (0.3, 1.0, 2.5):
+        c_true = scale * d0.C_cy
+        zeta = modes.lateral_modes(dataclasses.replace(d0, C_cy=c_true), "ring")[0][1]
+        d = derive(dataclasses.replace(row, q=row.q | {"xi_l_fit": zeta}), char.tire)
+        assert d.C_cy == pytest.approx(c_true, rel=1e-9) and d.C_cy_source.startswith("E09's release zeta")
+        assert modes.lateral_modes(d, "ring")[0][1] == pytest.approx(zeta, rel=1e-9)
+        assert (d.C_by, d.C_bgamma, d.k_cy) == (d0.C_by, d0.C_bgamma, d0.k_cy)  # only the tread damper moves
+    z_sidewalls = modes.lateral_modes(dataclasses.replace(d0, C_cy=0.0), "ring")[0][1]
+    d = derive(dataclasses.replace(row, q=row.q | {"xi_l_fit": 0.5 * z_sidewalls}), char.tire)
+    assert d.C_cy == pytest.approx(d0.C_cy) and "fallback: the ring's release spans zeta" in d.C_cy_source
+
+
+def test_maxwell_branches_give_the_storage_push_at_its_frequency(char):
+    """Default lateral springs: the static pushes, each sidewall spring with a Maxwell branch (relaxation
+    time the tire's) sized so the ring's k_l on the springs' storage at E09's release frequency is E09's
+    push on the storage moduli there, k_l' (1e-12: algebraic), and the static k_l at rest. The springs,
+    k_cy and the .tir are the static ones. Without a relaxation time (a folder written before it was
+    recorded), or without the storage push, no branch, and the source says why."""
+    row = char.rated_row()
+    tire = dataclasses.replace(char.tire, relaxation_time_s=0.04)
+    k_l = row.q["k_l_N_per_m"]
+    st = dataclasses.replace(row, q=row.q | {"k_l_storage_N_per_m": 1.1 * k_l, "f_l_storage_Hz": 15.0})
+    d, d0 = derive(st, tire), derive(st, tire, lateral_springs="static")
+    beta, tau = d.lateral_branch
+    assert tau == 0.04 and beta > 0 and "Maxwell branch" in d.lateral_spring_source
+    assert d.k_l_at(15.0) == pytest.approx(1.1 * k_l, rel=1e-12)
+    assert d.k_l_at(0.0) == pytest.approx(k_l, rel=1e-12) and d.k_l_at(0.0) == pytest.approx(d.k_l_ring, rel=1e-12)
+    assert (d.k_by, d.k_bgamma, d.k_cy, d.k_l) == (d0.k_by, d0.k_bgamma, d0.k_cy, d0.k_l)
+    x2 = (2 * math.pi * 15.0 * tau) ** 2  # the sidewall's storage stiffening at 15 Hz, 1 + beta x^2/(1 + x^2)
+    side = 1 / d.k_by + d.r_b**2 / d.k_bgamma
+    assert 1 / (1.1 * k_l) == pytest.approx(1 / d.k_cy + side / (1 + beta * x2 / (1 + x2)), rel=1e-12)
+    p = RigidRingParams.from_derived(d)
+    assert float(p.k_by_branch) == pytest.approx(beta * d.k_by) and float(p.tau_branch) == tau
+    assert float(RigidRingParams.from_derived(d0).k_by_branch) == 0.0
+    for r, t, why in ((st, char.tire, "no relaxation time"), (row, tire, "no push on the storage moduli")):
+        x = derive(r, t)
+        assert x.lateral_branch is None and why in x.lateral_spring_source and x.branch_beta is None
+
+
 def test_k_cy_fallback_when_ill_conditioned(char):
     r = char.rated_row()
     # a lateral sidewall as soft as the whole tire: 1/k_cy <= 0
@@ -107,7 +157,7 @@ def test_lateral_springs_on_the_storage_moduli(char):
     swap = Characterization(char.tire, tuple(st if x is row else x for x in char.rows))
     tirs = [{k: v for sec in tir.build(c)[0].values() for k, v, _ in sec} for c in (char, swap)]
     assert tirs[1] == tirs[0]
-    with pytest.raises(ConfigError, match="lateral_springs = 'dynamic': must be one of static, storage"):
+    with pytest.raises(ConfigError, match="lateral_springs = 'dynamic': must be one of maxwell, static, storage"):
         derive(st, char.tire, lateral_springs="dynamic")
 
 

@@ -58,7 +58,8 @@ class LateralStiffness(Experiment):
               "method": Field(str, default="auto", choices=("auto", "static", "transient"))}
     traced_names = ("k_l_N_per_m", "lateral_deflection_m")
     static_names: ClassVar[tuple] = ("k_l_N_per_m", "lateral_deflection_m", "lateral_force_N")
-    quantity_names = static_names + decay_names("decay_mass_kg", "C_l", "Ns_per_m")  # decay_s > 0
+    # decay_s > 0; xi_l_fit: the release's fitted zeta under an E09-only name (the rigid ring's tread damper)
+    quantity_names = static_names + decay_names("decay_mass_kg", "C_l", "Ns_per_m") + ("xi_l_fit",)
 
     force: jax.Array
     decay: jax.Array
@@ -142,7 +143,7 @@ class LateralStiffness(Experiment):
         y = np.asarray(rel.saved["q"])[:, 1] - y_preload
         M = wheel_mass(tire.spec)
         fd = decay_about_fit(ts, y, M, float(ts[0]) + ramp)
-        q |= decay_quantities(fd, "decay_mass_kg", "C_l", "Ns_per_m")
+        q |= decay_quantities(fd, "decay_mass_kg", "C_l", "Ns_per_m") | {"xi_l_fit": fd.xi_fit}
         checks |= decay_checks(fd, rel) | {
             # friction may keep the rim off its pre-load position; this is how far (m)
             "release_final_level_minus_preload_m": float(fd.x_final),

@@ -15,6 +15,15 @@ from .params import derive
 
 
 def _lateral_zeta(cx, c):
+    d = cx.d
+    if (d.C_cy_source or "").startswith("E09") and None not in (d.k_by, d.k_cy, d.k_bgamma, d.C_by, d.C_cy, d.C_bgamma):
+        f_r, z_r = lateral_modes(d, "ring")[0]
+        if _within(f_r, cx.val("lateral.f_Hz", "ring"), 0.02):  # the validation ran the ring variant
+            txt = (f"the ring's tread damper C_cy = {_n(d.C_cy, 'N s/m')} is set from this release ({d.C_cy_source}): "
+                   f"the ring's linear release has zeta {z_r:.4g} ({_p(z_r / c.shell - 1)} against the shell's fit), its "
+                   f"simulated release {c.ring:.4g}; what the simulated ring adds to its linearization (the string "
+                   f"contact, the patch's stick) is not measured")
+            return NONE, txt
     return _damping(cx, c, "C_l_Ns_per_m", "C_l_2p_Ns_per_m", "C_l_fit_Ns_per_m", "lateral.f_Hz",
                     "lateral_stiffness")
 
@@ -32,6 +41,10 @@ def _lateral_f(cx, c):
     ring = (f"in the ring variant (belt y_b, gamma_b on k_by, k_bgamma and the tread k_cy; the springs from "
             f"{d.lateral_spring_source}) the belt's {d.tire.m_b_kg:.4g} kg moves less than the rim and the mode is at "
             f"{_n(f_ring, 'Hz')} ({_p(f_ring / c.shell - 1)})")
+    if d.lateral_branch is not None and _within(f_ring, c.ring, 0.02):
+        f_s = _storage_f(cx)
+        return NONE, (ring + f"; the sidewall's Maxwell branches make its k_l x {d.k_l_at(f_s) / d.k_l:.4g} at "
+                      f"{_n(f_s, 'Hz')}, E09's push on the storage moduli there; the rest is not established")
     if _within(f_ring, c.ring, 0.02) and not _within(f_red, c.ring, 0.02):
         # the validation ran the ring variant: its linear mode is the metric; what is left is its stiffness
         txt = ring + f"; the shell's frequency needs (f_shell/f_ring)^2 = {(c.shell / f_ring) ** 2:.3g} x its stiffness"
@@ -48,7 +61,7 @@ def _lateral_f(cx, c):
                 f"({_p(f_st / c.shell - 1)}); the ring keeps the static springs because the same springs shorten "
                 f"its sigma_c from {_n(d.sigma_c, 'm')} to {_n(st.sigma_c, 'm')}, and the slip step's slower "
                 f"build-up sees the long-term moduli (measured: docs/rigid-ring.md); one linear spring cannot give "
-                f"both, a spring with a Maxwell branch would (not built)")
+                f"both; the default springs' Maxwell branches would (this ring has none: {d.lateral_spring_source})")
         state = _verdict(f_st, c.shell, c.ring, c.tolerance)
         return state, txt + ("" if state == FULL else "; the rest is not established")
     txt = "the validation's " + red + "; " + ring
@@ -165,8 +178,11 @@ def _step_force(cx, c, key):
                      f"{math.degrees(alpha):.3g} deg), the shell's step {_n(shell, unit)} ({_p(shell / curve - 1)} vs the curve)")
         lin = curve  # the ring follows the curve: what is left is the step against the steady curve
     elif curve:
-        parts.append(f"the ring's {key} {_n(abs(c.ring), unit)} is the linear {sym} sin(alpha) at "
-                     f"{math.degrees(alpha):.3g} deg; the cornering curve{at} has {_n(curve, unit)} there "
+        # the record's tail may still carry the lateral mode's ringing: say how far from the ring's own law
+        off = "" if _within(abs(c.ring), lin, 0.002) else (f" ({_p(abs(c.ring) / lin - 1)} from it over the record's tail, "
+                                                            f"where its lateral mode still rings)")
+        parts.append(f"the ring's {key} {_n(abs(c.ring), unit)} is the linear {sym} sin(alpha) = {_n(lin, unit)} at "
+                     f"{math.degrees(alpha):.3g} deg{off}; the cornering curve{at} has {_n(curve, unit)} there "
                      f"({_p(lin / curve - 1)} linear vs curve), the shell's step {_n(shell, unit)} "
                      f"({_p(shell / curve - 1)} vs curve)")
         if not _within(lin, curve, c.tolerance) and _within(shell, curve, c.tolerance):
@@ -231,6 +247,11 @@ def _step_s63(cx, c):
                          f"length: a stretched string with the same k_f/k_l (sigma_string = sigma - a = "
                          f"{_n(d.sigma - d.a, 'm')}) reaches 63 % at {_n(s_str, 'm')} ({s_str / d.sigma:.2g} sigma; "
                          f"{_p(s_str / c.shell - 1)} against the shell)")
+    if d.lateral_branch is not None and d.sigma:
+        f_b = v_here / (2 * math.pi * d.sigma)
+        parts.append(f"the sidewall's Maxwell branches (tau {1e3 * d.lateral_branch[1]:.3g} ms) make the ring's k_l x "
+                     f"{d.k_l_at(f_b) / d.k_l:.4g} at the build-up's V/(2 pi sigma) = {_n(f_b, 'Hz')} (x "
+                     f"{d.k_l_at(_storage_f(cx) or f_b) / d.k_l:.4g} at the lateral mode)")
     if s_str:
         state = _verdict(s_str, c.shell, c.ring, c.tolerance)
     for vo in [v for v in _speeds(cx) if v != v_here]:

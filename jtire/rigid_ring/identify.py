@@ -1,12 +1,14 @@
 """Rigid-ring identification of the vertical path and the aligning moment from a measured row
 (docs/rigid-ring.md §3, revised; `params.derive` uses them): the split of the dynamic stiffness
-with the drum's k_dv, the residual spring's quadratic law, the two-test damper split, and E10's
-M_z curve as a table."""
+with the drum's k_dv, the residual spring's quadratic law, the two-test damper split, the tread's
+lateral damper from E09's release, the sidewall's lateral Maxwell branches, and E10's M_z curve as a
+table."""
 
 import math
 
 import numpy as np
 
+from .linear import lateral_ring_modes
 from .linear import modes as linear_modes
 
 
@@ -94,6 +96,67 @@ def damping_split(tire, k_bz, k_vr, zeta_v, zeta_bounce, tau, n_grid=201):
     x = 0.5 * (lo + hi)
     return x * total, (1.0 - x) * total, (f"belt mode zeta {zeta_v:.3g} (E03) and in-contact bounce zeta "
                                           f"{zeta_bounce:.3g} (E04)")
+
+
+def tread_damper(tire, r_b, k_by, k_cy, k_bgamma, C_by, C_bgamma, zeta_l, c_fallback, branch=None, c_max=1e6):
+    """(C_cy, source) of the ring's lateral tread damper (rigid-ring.md §5, revised). E07 and E08 measure
+    the sidewall's C_by and C_bgamma; the tread's damper has no test of its own, and E09's release is
+    the test that excites it: C_cy is set so the ring's linear lateral release (`linear.lateral_ring_modes`,
+    with the sidewall's Maxwell branches `branch` = (beta, tau) when it has them) has E09's fitted zeta_l (its damped-sine fit, the same reduction the validation applies to both
+    records): the smallest such C_cy in [0, c_max], bracketed on a grid, then bisected.
+    Fallback, named: c_fallback (k_cy C_l / k_l, the tread at E09's time constant) when zeta_l is
+    missing or no C_cy >= 0 reaches it (the sidewall's dampers alone give more)."""
+    if not finite(r_b, k_by, k_cy, k_bgamma, C_by, C_bgamma):
+        return c_fallback, "k_cy C_l / k_l (fallback: the ring's lateral springs or sidewall dampers are missing)"
+    if not finite(zeta_l) or zeta_l <= 0:
+        return c_fallback, "k_cy C_l / k_l (fallback: no E09 xi_l_fit)"
+
+    def zeta(c):
+        _, z = lateral_ring_modes(tire, r_b, k_by, k_cy, k_bgamma, C_by, c, C_bgamma, branch)
+        return z[0] if len(z) else np.nan
+
+    cs = np.concatenate([[0.0], np.geomspace(1.0, c_max, 121)])
+    gs = np.array([zeta(c) for c in cs]) - zeta_l
+    up = [i for i in range(cs.size - 1) if np.isfinite(gs[i]) and np.isfinite(gs[i + 1]) and gs[i] <= 0 <= gs[i + 1]]
+    if not up:  # (a stiff enough tread damper locks the tread: zeta is not monotone in C_cy, hence the grid)
+        ok = gs[np.isfinite(gs)] + zeta_l
+        rng = "" if ok.size == 0 else f" spans zeta {ok.min():.3g}-{ok.max():.3g}"
+        return c_fallback, (f"k_cy C_l / k_l (fallback: the ring's release{rng} for C_cy in [0, {c_max:.3g}] N s/m, "
+                            f"E09's is {zeta_l:.3g})")
+    lo, hi = cs[up[0]], cs[up[0] + 1]  # the smallest C_cy that reaches it
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if zeta(mid) < zeta_l:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi), f"E09's release zeta {zeta_l:.3g} (damped-sine fit) with E07's C_by and E08's C_bgamma"
+
+
+def maxwell_branch(k_l, k_by, k_bgamma, k_cy, r_b, storage_ratio, f_storage, tau):
+    """((beta, tau), source) of the sidewall's lateral Maxwell branches (rigid-ring.md §5, revised), or
+    (None, why). E07-E09 push statically (the rubber's long-term moduli); E09's push on the storage
+    moduli at its release frequency f_storage gives k_l' = storage_ratio k_l. The ring keeps its static
+    springs, so E09's static deflection and the slip step's slow build-up see them, and puts a Maxwell
+    branch (stiffness beta k, relaxation time tau) beside k_by and k_bgamma, with beta such that at
+    f_storage the ring's series stiffness (tread k_cy unchanged) is k_l':
+        1/k_l' = 1/k_cy + (1/k_by + r_b^2/k_bgamma) / s,  s = 1 + beta x^2 / (1 + x^2),  x = 2 pi f tau.
+    The tread's own stiffening is carried by the sidewall's branches (the tread string has none)."""
+    if not finite(storage_ratio, f_storage) or storage_ratio <= 1.0 or f_storage <= 0:
+        return None, "no push on the storage moduli in the row (k_l_storage, f_l_storage_Hz), or k_l' <= k_l"
+    if not finite(tau) or tau <= 0:
+        return None, "no relaxation time in the characterization's tire (an older folder)"
+    if not finite(k_l, k_by, k_bgamma, k_cy, r_b):
+        return None, "the lateral springs are missing"
+    side = 1.0 / k_by + r_b**2 / k_bgamma
+    rest = 1.0 / (storage_ratio * k_l) - 1.0 / k_cy
+    if not rest > 0:
+        return None, f"the tread's k_cy alone is softer than k_l' = {storage_ratio * k_l:.4g} N/m"
+    x = 2.0 * math.pi * f_storage * tau
+    beta = (side / rest - 1.0) * (1.0 + x * x) / (x * x)
+    return (beta, tau), (f"static pushes with a Maxwell branch beside k_by and k_bgamma (beta {beta:.4g}, tau "
+                         f"{tau * 1e3:.4g} ms): k_l x {storage_ratio:.4g} at {f_storage:.4g} Hz, E09's release on the "
+                         f"storage moduli")
 
 
 def mz_curve(curves):

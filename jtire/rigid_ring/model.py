@@ -8,7 +8,8 @@ the road pushes it right, F_y < 0); scenarios take SAE angles and convert (alpha
 State y (N_STATE,): positions q (10,) = [x_a, z_a, theta_a, x_b, z_b, theta_b, y_a, gamma_a, y_b,
 gamma_b] (rim a, belt b; m, rad), their velocities (10,), then the contact's tread deflections u
 (longitudinal, m) and e (lateral, m; in the reduced model the whole tire's lateral deflection), then
-the tread strings' node deflections (N_TREAD longitudinal, N_TREAD lateral; contact = "string").
+the tread strings' node deflections (N_TREAD longitudinal, N_TREAD lateral; contact = "string"), then
+the internal states q_by, q_bgamma of the sidewall's lateral Maxwell branches (ring variant).
 
 Contact = "lag" (MF-Swift's first-order slip lags, below) or "string" (the default): the tread
 through the patch as a stretched string (Pacejka, Tyre and Vehicle Dynamics §5.4): its contact points
@@ -33,7 +34,8 @@ Longitudinal slip (§5): u = a kappa', a du/dt + |V| u = -a V_sx, V_sx = V + x_b
 contact relaxation length is a (study eq 5-17) and at V = 0 the patch is a tread spring; C_vlow
 = damp_vlow k_cx fades out linearly by V = VXLOW (MF-Swift DAMP_VLOW).
 Out-of-plane, "ring" (Chae; §6): belt y_b, gamma_b on the sidewall (k_by, C_by; k_bgamma,
-C_bgamma); the tread e between the belt's contact point y_b + r_l gamma_b and the patch,
+C_bgamma; each spring with a Maxwell branch beside it where the parameters have one: force
+k_branch (x - q), dq/dt = (x - q) / tau_branch, x the spring's deflection); the tread e between the belt's contact point y_b + r_l gamma_b and the patch,
 sigma_c de/dt + |V| e = sigma_c V_cy (damping folded in exactly, see `_tread_rate`),
 F_y = -(k_cy e + C_cy de/dt), sigma_c = k_f / k_cy. Steady: F_y = -k_f sin(alpha).
 Out-of-plane, "reduced" (§5 fallback, MF 6.1's own transient): no belt lateral DOFs; the rim
@@ -63,9 +65,9 @@ from .params import RigidRingParams
 
 N_Q = 10
 N_TREAD = 6  # string nodes behind the leading edge (see `_chebyshev`)
-N_STATE = 2 * N_Q + 2 + 2 * N_TREAD
+N_STATE = 2 * N_Q + 2 + 2 * N_TREAD + 2
 IDX = {"x_a": 0, "z_a": 1, "theta_a": 2, "x_b": 3, "z_b": 4, "theta_b": 5, "y_a": 6, "gamma_a": 7, "y_b": 8,
-       "gamma_b": 9, "u": 20, "e": 21}
+       "gamma_b": 9, "u": 20, "e": 21, "q_by": 22 + 2 * N_TREAD, "q_bgamma": 23 + 2 * N_TREAD}
 U_NODES = tuple(range(22, 22 + N_TREAD))
 E_NODES = tuple(range(22 + N_TREAD, 22 + 2 * N_TREAD))
 CONTACTS = ("string", "lag")
@@ -250,18 +252,22 @@ class RigidRing(eqx.Module):
             en_dot = jnp.zeros_like(en)
             fy = -contact * (k_t * e + c_t * e_dot)
         if self.lateral == "ring":
-            fsy = -p.k_by * (yb - ya) - p.C_by * (vyb - vya)
-            msg = -p.k_bgamma * (gb - ga) - p.C_bgamma * (vgb - vga)
+            qy, qg = y[IDX["q_by"]], y[IDX["q_bgamma"]]
+            dy, dg = yb - ya, gb - ga
+            fsy = -p.k_by * dy - p.C_by * (vyb - vya) - p.k_by_branch * (dy - qy)
+            msg = -p.k_bgamma * dg - p.C_bgamma * (vgb - vga) - p.k_bgamma_branch * (dg - qg)
+            branch_dot = jnp.stack([dy - qy, dg - qg]) / p.tau_branch
             rim_y = -fsy
         else:
             fsy = msg = jnp.zeros_like(fy)
+            branch_dot = jnp.zeros(2, y.dtype)
             rim_y = fy
         # M_z from E10's steady curve at the slip the force stands for (alpha'_SAE = F_y_ISO / k_f; linear
         # k_m alpha' without a curve); an output only: the ring has no yaw DOF
         mz = -jnp.interp(fy / p.k_f, p.mz_alpha, p.mz_value)
         return {"F_x": fx, "F_y": fy, "F_z": fz, "M_z": mz, "F_sx": fsx, "F_sz": fsz, "M_stheta": msth,
                 "F_sy": fsy, "M_sgamma": msg, "u_dot": u_dot, "e_dot": e_dot, "r_l": rl, "rho": rho,
-                "tread_dot": jnp.concatenate([jnp.stack([u_dot, e_dot]), un_dot, en_dot]),
+                "tread_dot": jnp.concatenate([jnp.stack([u_dot, e_dot]), un_dot, en_dot]), "branch_dot": branch_dot,
                 "z_road": zr, "alpha_iso": alpha, "contact": contact,
                 "tire_on_rim_x": -fsx, "tire_on_rim_z": -fsz, "tire_on_rim_y": rim_y}
 
@@ -286,7 +292,7 @@ class RigidRing(eqx.Module):
         acc = jnp.concatenate([acc_a, acc_b, lat_a, lat_b]) * drive.free  # the order of q
         if self.lateral != "ring":
             acc = acc.at[8:10].set(0.0)
-        return jnp.concatenate([y[N_Q:2 * N_Q], acc, f["tread_dot"]])
+        return jnp.concatenate([y[N_Q:2 * N_Q], acc, f["tread_dot"], f["branch_dot"]])
 
     def outputs(self, ts, ys, drive: Drive) -> dict:
         """Forces at saved samples: ts (N,), ys (N, N_STATE) -> dict of (N,) arrays."""
@@ -326,16 +332,17 @@ def _linearize(model, drive, y_eq, t):
     return jax.jacfwd(lambda y: model.vector_field(t, y, drive))(y_eq)
 
 
-def modes(jac, coords, slip=()):
+def modes(jac, coords, slip=(), internal=()):
     """Modes of the linearized system restricted to coordinates `coords` (names of q), their
     velocities and the slip states `slip` ("u", "e": each with its string's nodes; the states the
-    model's contact leaves constant add zero eigenvalues, not oscillatory modes). Returns (f_n Hz,
+    model's contact leaves constant add zero eigenvalues, not oscillatory modes) and the internal
+    states `internal` (e.g. "q_by", "q_bgamma": the Maxwell branches). Returns (f_n Hz,
     zeta) of the oscillatory modes, sorted by frequency, as numpy arrays."""
     import numpy as np
 
     iq = [IDX[c] for c in coords]
     nodes = {"u": U_NODES, "e": E_NODES}
-    idx = iq + [i + N_Q for i in iq] + [j for s in slip for j in (IDX[s],) + nodes[s]]
+    idx = iq + [i + N_Q for i in iq] + [j for s in slip for j in (IDX[s],) + nodes[s]] + [IDX[n] for n in internal]
     lam = np.linalg.eigvals(np.asarray(jac)[np.ix_(idx, idx)])
     osc = lam[lam.imag > 1e-9]
     wn = np.abs(osc)

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from .linear import lateral_ring_modes
 from .linear import modes as _modes
 from .model import _D_TREAD, _W_TREAD, CONTACT, N_TREAD, VXLOW
 from .params import RigidRingParams
@@ -86,18 +87,12 @@ def fore_aft_modes(d, speed, k_bx=None, C_bx=None, C_btheta=None, contact=CONTAC
 def lateral_modes(d, variant):
     """Lateral release linearization (standing, rim y free, camber held, patch stuck).
     "reduced": m_tot on k_l || C_l. "ring": rim m_a on the sidewall (k_by, C_by) to the belt m_b,
-    I_bx (camber k_bgamma, C_bgamma) standing on the tread k_cy || C_cy at the lever arm r_b.
-    Returns [(f, zeta)]."""
+    I_bx (camber k_bgamma, C_bgamma) standing on the tread k_cy || C_cy at the lever arm r_b, with the
+    sidewall's Maxwell branches where d has them (`Derived.lateral_branch`). Returns [(f, zeta)]."""
     t = d.tire
     if variant == "reduced":
         return [(math.sqrt(d.k_l / t.m_tot_kg) / (2 * math.pi), d.C_l / (2 * math.sqrt(d.k_l * t.m_tot_kg)))]
-    r = d.r_b
-    M = np.diag([t.m_tot_kg - t.m_b_kg, t.m_b_kg, t.I_bx_kgm2])
-
-    def mat(kb, kc, kg):
-        return np.array([[kb, -kb, 0.0], [-kb, kb + kc, kc * r], [0.0, kc * r, kg + kc * r * r]])
-
-    f, z, _ = _modes(M, mat(d.k_by, d.k_cy, d.k_bgamma), mat(d.C_by, d.C_cy, d.C_bgamma))
+    f, z = lateral_ring_modes(t, d.r_b, d.k_by, d.k_cy, d.k_bgamma, d.C_by, d.C_cy, d.C_bgamma, d.lateral_branch)
     return list(zip(f, z))
 
 

@@ -6,31 +6,26 @@ the tables and the .tir export). `RigidRingParams.from_derived(d)` gives the mod
 float64 leaves; `Derived.missing(group)` names what a scenario
 lacks; a missing input is a finite placeholder, see `_leaf`).
 
-Vertical split (§3, revised). The dynamic springs use the tangent k_vt of E02's load-deflection
-  curve at the load (the secant k_sv when the row has none, named in stiffness_source):
-  1/k_vt = 1/k_bz + 1/k_vr (sidewall and residual springs in series, small motions about the load).
-  Variant A (used when valid): k_dv = k_bz + k_vr (rim locked, belt on the drum: both act on the
-    belt), k_bz, k_vr = (k_dv +- sqrt(k_dv^2 - 4 k_dv k_vt)) / 2, larger root to the sidewall;
-    needs k_dv >= 4 k_vt.
-  Variant B (reported beside; used when A is invalid): k_bz = k_dv, k_vr = (1/k_vt - 1/k_dv)^-1.
-  The residual spring is F = k_vr1 rho + k_vr2 rho^2, its tangent at the load k_vr and its secant
-  (1/k_sv - 1/k_bz)^-1, so the ring rests at F_z/k_sv and rings at the tangent.
-  Damping from the two tests that excite it (`identify.damping_split`): E03's belt-mode zeta gives C_bz + C_vr,
-  E04's in-contact bounce zeta how it divides; the first spec's one time constant tau = C_tot / k_sv
-  for both (C_bz = tau k_bz, C_vr = tau k_vr) is the named fallback (damping_source).
+Vertical split (§3, revised; `identify`): the dynamic springs use E02's tangent k_vt at the load (the
+  secant k_sv without one, named in stiffness_source), 1/k_vt = 1/k_bz + 1/k_vr; variant A (k_dv = k_bz
+  + k_vr, larger root to the sidewall; needs k_dv >= 4 k_vt), else variant B (k_bz = k_dv). The
+  residual spring F = k_vr1 rho + k_vr2 rho^2 has the tangent k_vr and the secant (1/k_sv - 1/k_bz)^-1
+  at the load: the ring rests at F_z/k_sv and rings at the tangent. C_bz + C_vr from E03's belt-mode
+  zeta, their split from E04's in-contact bounce zeta; tau = C_tot / k_sv for both is the named fallback.
 Longitudinal sidewall spring: k_bx, C_bx measured by E13 (rigid belt pushed fore-aft, jtire's addition);
   without E13 the first spec's isotropy assumption k_bx = k_bz, C_bx = C_bz, named in k_bx_source.
 Lateral tread spring (§5): 1/k_cy = 1/k_l - 1/k_by - r_b^2/k_bgamma (rim held in camber; r_b the
-  belt centre's height above the road, R0 - F_z/k_vr, the ring's lever arm),
-  sigma_c = k_f / k_cy, C_cy = k_cy C_l / k_l. Ill-conditioned (a difference of compliances a few
-  per cent apart): when 1/k_cy <= 0 or sigma_c falls outside [a/4, min(4 a, sigma)], the SWIFT
-  choice sigma_c = a, k_cy = k_f / a is used and the ring's lateral stiffness error is reported.
-Lateral springs: E07-E09 push statically, on the rubber's long-term moduli; the lateral mode rings where
-  the Prony series' storage modulus is higher. The row's k_l_storage (E09's push on the storage moduli at
-  E09's release frequency) gives the ratio r = k_l_storage / k_l, always reported. With
-  lateral_springs="storage" k_by, k_bgamma and k_l are all taken x r (k_cy x r and sigma_c / r follow
-  from the split above): the mode's frequency, at the cost of the slip step's relaxation, which sees the
-  slower moduli (docs/rigid-ring.md); the default keeps the static pushes. k_l_static is E09's value.
+  belt centre's height, R0 - rho_r), sigma_c = k_f / k_cy; when 1/k_cy <= 0 or sigma_c falls outside
+  [a/4, min(4 a, sigma)], the SWIFT choice sigma_c = a, k_cy = k_f / a (the ring's k_l error reported).
+Lateral tread damper: C_cy such that the ring's linear lateral release, with E07's C_by and E08's
+  C_bgamma, has E09's fitted zeta (`identify.tread_damper`); k_cy C_l / k_l is the named fallback.
+Lateral springs: E07-E09 push statically (the rubber's long-term moduli); the lateral mode rings where
+  the storage modulus is higher. The row's k_l_storage (E09's push on the storage moduli at E09's
+  release frequency) gives r = k_l_storage / k_l. lateral_springs="maxwell" (the default) keeps the
+  static pushes and puts a Maxwell branch beside k_by and k_bgamma (`identify.maxwell_branch`, tau the
+  rubber's longest relaxation time) so that the ring's k_l is r k_l at that frequency: static at rest,
+  stiffer at the mode. "storage" takes k_by, k_bgamma, k_l x r (k_cy x r follows); "static" neither.
+  k_l_static is E09's value.
 """
 
 import dataclasses
@@ -40,12 +35,12 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from ..errors import ConfigError
-from .identify import damping_split, mz_curve, residual_spring, vertical_split
+from .identify import damping_split, maxwell_branch, mz_curve, residual_spring, tread_damper, vertical_split
 from .identify import finite as _ok
 from .table import ConditionRow, TireInfo
 
 SIGMA_C_RANGE = (0.25, 4.0)  # plausible sigma_c / a
-LATERAL_SPRINGS = ("static", "storage")  # which moduli the ring's lateral springs rest on (`derive`)
+LATERAL_SPRINGS = ("maxwell", "static", "storage")  # the ring's lateral springs (`derive`; the first: default)
 
 
 def _f(x):
@@ -123,6 +118,23 @@ class Derived:
     k_l_static: float | None = None  # E09's static k_l (k_l above is the ring's: x lateral_storage_ratio)
     lateral_storage_ratio: float | None = None  # k_l on the storage moduli / static k_l (None: not measured)
     lateral_spring_source: str | None = None  # which moduli the lateral springs rest on, and why
+    C_cy_source: str | None = None  # how the lateral tread damper was identified (`identify.tread_damper`)
+    lateral_branch: tuple | None = None  # (beta, tau s): the sidewall's lateral Maxwell branches (`maxwell_branch`)
+
+    @property
+    def branch_beta(self) -> float | None:
+        """The sidewall's lateral Maxwell branches' stiffness ratio beta (None: no branch)."""
+        return None if self.lateral_branch is None else self.lateral_branch[0]
+
+    def k_l_at(self, f_hz: float) -> float | None:
+        """The ring's lateral stiffness (rim camber held) on the springs' storage at f_hz: the Maxwell
+        branches (when it has them) stiffen the sidewall by 1 + beta x^2 / (1 + x^2), x = 2 pi f tau."""
+        if not _ok(self.k_cy, self.k_by, self.k_bgamma, self.r_b):
+            return None
+        beta, tau = self.lateral_branch or (0.0, 1.0)
+        x2 = (2.0 * math.pi * f_hz * tau) ** 2
+        side = (1.0 / self.k_by + self.r_b**2 / self.k_bgamma) / (1.0 + beta * x2 / (1.0 + x2))
+        return 1.0 / (1.0 / self.k_cy + side)
 
     def residual_deflection(self, force: float) -> float:
         """The residual spring's deflection (m) under a contact force (N): the root of
@@ -186,9 +198,10 @@ class Derived:
             raise ConfigError(f"{what} at {self.load_N:.0f} N / {self.pressure_Pa:.0f} Pa: missing {m}")
 
 
-def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "static") -> Derived:
-    """The derived quantities of one row. lateral_springs: "static" (E07-E09's pushes, the default) or
-    "storage" (all three x the row's k_l_storage / k_l when it has one; see the module docstring)."""
+def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "maxwell") -> Derived:
+    """The derived quantities of one row. lateral_springs: "maxwell" (the default: E07-E09's pushes with
+    the sidewall's Maxwell branches where the row and tire allow, else "static"), "static" (E07-E09's
+    pushes) or "storage" (all three x the row's k_l_storage / k_l when it has one); the module docstring."""
     if lateral_springs not in LATERAL_SPRINGS:
         raise ConfigError(f"lateral_springs = {lateral_springs!r}: must be one of {', '.join(LATERAL_SPRINGS)}")
     g = row.get
@@ -249,7 +262,7 @@ def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "static") -
         return t * k if _ok(t, k) else None
 
     sigma = k_f / k_l if _ok(k_f, k_l) else None
-    k_cy = sigma_c = c_cy = src = k_l_ring = k_l_err = None
+    k_cy = sigma_c = c_cy = c_cy_src = src = k_l_ring = k_l_err = branch = None
     r_b = r_l if res["rho_r"] is None else r0 - res["rho_r"]
     if _ok(k_l, k_by, k_bgamma, r_b, k_f, a):
         comp = 1.0 / k_l - 1.0 / k_by - r_b**2 / k_bgamma
@@ -262,8 +275,12 @@ def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "static") -
             k_cy, sigma_c, src = k_f / a, a, f"fallback sigma_c = a ({why})"
         k_l_ring = 1.0 / (1.0 / k_cy + 1.0 / k_by + r_b**2 / k_bgamma)
         k_l_err = k_l_ring / k_l - 1.0
-        if _ok(c_l):
-            c_cy = k_cy * c_l / k_l
+        if lateral_springs == "maxwell":
+            branch, why = maxwell_branch(k_l, k_by, k_bgamma, k_cy, r_b, storage, g("f_l_storage_Hz"),
+                                         tire.relaxation_time_s)
+            lat_src = why if branch is not None else f"{lat_src} (no Maxwell branch: {why})"
+        c_cy, c_cy_src = tread_damper(tire, r_b, k_by, k_cy, k_bgamma, g("C_by_Ns_per_m"), g("C_bgamma_Nms_per_rad"),
+                                      g("xi_l_fit"), k_cy * c_l / k_l if _ok(c_l) else None, branch)
     c_x = None
     k_bx, c_bx = g("k_bx_N_per_m"), g("C_bx_Ns_per_m")
     if _ok(k_bx) and k_bx > 0:
@@ -287,7 +304,8 @@ def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "static") -
         k_cy=k_cy, sigma_c=sigma_c, C_cy=c_cy, k_cy_source=src, k_l_ring=k_l_ring, k_l_ring_rel_error=k_l_err,
         C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src,
         k_vt=k_t, **res, damping_source=split[2], mz_curve=mz_curve(row.curves), ellips=_ellips(row),
-        k_l_static=k_l_static, lateral_storage_ratio=storage, lateral_spring_source=lat_src)
+        k_l_static=k_l_static, lateral_storage_ratio=storage, lateral_spring_source=lat_src, C_cy_source=c_cy_src,
+        lateral_branch=branch)
 
 
 def _ellips(row) -> tuple | None:
@@ -354,6 +372,9 @@ class RigidRingParams(eqx.Module):
     k_m: jnp.ndarray
     damp_vlow: jnp.ndarray
     k_vr2: jnp.ndarray
+    k_by_branch: jnp.ndarray  # the sidewall's lateral Maxwell branches: stiffness beta k_by, beta k_bgamma,
+    k_bgamma_branch: jnp.ndarray  # relaxation time tau_branch (Derived.lateral_branch; 0 stiffness: none)
+    tau_branch: jnp.ndarray
     mz_alpha: jnp.ndarray  # M_z(alpha') as a table (SAE, rad and N m; alpha' = -F_y_SAE / k_f): E10's curve,
     mz_value: jnp.ndarray  # or the line k_m alpha' through two points when the row has none
 
@@ -362,6 +383,7 @@ class RigidRingParams(eqx.Module):
         t = d.tire
         if not t.m_tot_kg > t.m_b_kg > 0:
             raise ConfigError(f"tire m_tot_kg = {t.m_tot_kg}, m_b_kg = {t.m_b_kg}: need m_tot > m_b > 0")
+        beta, tau = d.lateral_branch or (0.0, 1.0)  # no branch: zero stiffness (its state then idles)
         return cls(m_b=_leaf(t.m_b_kg), m_a=_leaf(t.m_tot_kg - t.m_b_kg), m_tot=_leaf(t.m_tot_kg),
                    I_by=_leaf(t.I_by_kgm2), I_bx=_leaf(t.I_bx_kgm2), I_ay=_leaf(t.I_ay_kgm2), I_ax=_leaf(t.I_ax_kgm2),
                    R0=_leaf(t.unloaded_radius_m), a=_leaf(d.a), r_l=_leaf(d.r_l), r_e=_leaf(d.r_e),
@@ -370,7 +392,8 @@ class RigidRingParams(eqx.Module):
                    k_k=_leaf(d.k_k), k_by=_leaf(d.k_by), C_by=_leaf(d.C_by), k_bgamma=_leaf(d.k_bgamma),
                    C_bgamma=_leaf(d.C_bgamma), k_cy=_leaf(d.k_cy), C_cy=_leaf(d.C_cy), k_l=_leaf(d.k_l),
                    C_l=_leaf(d.C_l), k_f=_leaf(d.k_f), k_m=_leaf(d.k_m), damp_vlow=_leaf(damp_vlow),
-                   k_vr2=_leaf(d.k_vr2 or 0.0), **_mz_table(d))
+                   k_vr2=_leaf(d.k_vr2 or 0.0), k_by_branch=_leaf(beta * (d.k_by or 0.0)),
+                   k_bgamma_branch=_leaf(beta * (d.k_bgamma or 0.0)), tau_branch=_leaf(tau), **_mz_table(d))
 
     @classmethod
     def from_row(cls, row: ConditionRow, tire: TireInfo, damp_vlow: float = 0.001) -> "RigidRingParams":

@@ -31,6 +31,8 @@ DERIVED = (
     ("k_cy_N_per_m", "k_cy", "N/m", "kN/m", 1e-3, "out", "k_cy"),
     ("sigma_c_m", "sigma_c", "m", "mm", 1e3, "out", "sigma_c"),
     ("sigma_kf_over_kl_m", "k_f/k_l", "m", "mm", 1e3, "out", "sigma"),
+    ("C_cy_Ns_per_m", "C_cy", "N s/m", "N s/m", 1.0, "out", "C_cy"),
+    ("branch_beta", "Maxwell beta", "-", "-", 1.0, "out", "branch_beta"),
 )
 
 
@@ -67,6 +69,8 @@ def table_rows(char: Characterization, plane: str) -> list:
                 row["k_dv_over_k_sv"] = d.k_dv / d.k_sv
         else:
             row["k_cy_source"] = d.k_cy_source
+            row["C_cy_source"] = d.C_cy_source
+            row["lateral_spring_source"] = d.lateral_spring_source
             row["k_l_ring_rel_error"] = d.k_l_ring_rel_error
         out.append(row)
     return out
@@ -151,6 +155,8 @@ def markdown(char: Characterization, plane: str) -> str:
         items.append(("k_cy source", lambda r, d: DASH if d.k_cy_source is None else
                       ("series" if d.k_cy_source.startswith("series") else "fallback sigma_c = a")))
         items.append(("k_l' / k_l", lambda r, d: _fmt(d.lateral_storage_ratio)))
+        items.append(("C_cy from", lambda r, d: DASH if d.C_cy_source is None else
+                      ("E09's zeta" if d.C_cy_source.startswith("E09") else "k_cy C_l / k_l (fallback)")))
     for label, fn in items:
         for i, load in enumerate(loads):
             lines.append(f"| {label if i == 0 else ''} | {load / U.G0:.1f} | "
@@ -161,8 +167,10 @@ def markdown(char: Characterization, plane: str) -> str:
             "F_z/k_sv. C_bz + C_vr from E03's belt-mode zeta, divided so the linear bounce has E04's in-contact "
             "zeta; else (and in the B columns) tau = C_tot / k_sv for both." if plane == "in" else
             "k_cy from 1/k_l - 1/k_by - r_b^2/k_bgamma, or the fallback sigma_c = a when ill-conditioned. k_l' / k_l: "
-            "E09's push on the rubber's storage moduli at its release frequency over its static push (the ring's "
-            "springs stay the static pushes; docs/rigid-ring.md).")
+            "E09's push on the rubber's storage moduli at its release frequency over its static push; the ring's "
+            "springs are the static pushes, each sidewall spring k with a Maxwell branch (stiffness beta k, the "
+            "rubber's longest relaxation time) that makes its k_l equal k_l' there. C_cy: the tread damper that "
+            "gives the ring's linear release E09's fitted zeta (docs/rigid-ring.md).")
     return f"### {title}\n\n" + "\n".join(lines) + f"\n\n{note} Damping: two-peak / fit (relative difference).\n"
 
 

@@ -218,14 +218,16 @@ def lateral_release(d: Derived, force=5e3, lateral="reduced", duration=0.5, n_sa
     eq = vertical_equilibrium(d, d.load_N)
     st = lateral_static(d, force, lateral)
     drive = Drive.make(free=("y_a",))
-    y0 = _state(z_a=eq["z_a"], z_b=eq["z_b"], y_a=st["y_a"], y_b=st["y_b"], gamma_b=st["gamma_b"], e=st["e"])
+    # a static push relaxes the Maxwell branches: their states sit at the springs' deflections
+    y0 = _state(z_a=eq["z_a"], z_b=eq["z_b"], y_a=st["y_a"], y_b=st["y_b"], gamma_b=st["gamma_b"], e=st["e"],
+                q_by=st["y_b"] - st["y_a"], q_bgamma=st["gamma_b"])
     ts = np.linspace(0.0, duration, n_save)
     ys = _check(simulate(m, drive, y0, duration, ts), "lateral release")
     ya = ys[:, IDX["y_a"]]
     fd = sig.free_decay(ts, ya, d.tire.m_tot_kg, x_final=0.0)
     jac = linearize(m, drive, _state(z_a=eq["z_a"], z_b=eq["z_b"]))
     coords = ("y_a",) if lateral == "reduced" else ("y_a", "y_b", "gamma_b")
-    fn, zeta = modes(jac, coords, ("e",))
+    fn, zeta = modes(jac, coords, ("e",), () if lateral == "reduced" else ("q_by", "q_bgamma"))
     m_tot = d.tire.m_tot_kg
     q = {"k_l_static_N_per_m": force / st["y_a"], "f_d_Hz": fd.omega_d_fit / (2 * math.pi),
          "f_n_Hz": fd.omega_n_fit / (2 * math.pi), "zeta_fit": fd.xi_fit, "zeta_2p": fd.xi_2p,

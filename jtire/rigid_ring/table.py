@@ -102,7 +102,8 @@ EXTRA_KEYS = ("deflection_m", "first_mode_fit_fn_Hz", "first_mode_xi", "k_dv_fit
               "omega_n_in_contact_fit_rad_per_s",
               # E03's tandem cam (jtire.enveloping), fitted to its quasi-static crossing
               "ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order", "enveloping_fit_rms_height_m",
-              "enveloping_max_height_m", "f_l_storage_Hz")  # f_l_storage: where k_l_storage's moduli are taken
+              "enveloping_max_height_m", "f_l_storage_Hz",  # f_l_storage: where k_l_storage's moduli are taken
+              "xi_l_fit")  # E09's release zeta (damped-sine fit): the ring's lateral tread damper is set to it
 CURVE_KEYS = ("slip_angle_deg", "lateral_force_N", "M_z_SAE_Nm", "F_z_N", "F_y_SAE_N", "F_x_N")
 CURVE_REQUIRED = ("slip_angle_deg", "lateral_force_N")
 SLIP_CURVE_KEYS = ("slip", "force_x_N", "force_z_N")
@@ -151,6 +152,8 @@ class TireInfo:
     # None where not known (the study gives neither; folders written before they were recorded)
     tire_Iy_kgm2: float | None = None
     tire_Ix_kgm2: float | None = None
+    # the rubber's longest Prony relaxation time (s): the ring's lateral Maxwell branches (None: not known)
+    relaxation_time_s: float | None = None
 
     @classmethod
     def from_reference(cls, reference=None, tire_toml=None) -> "TireInfo":
