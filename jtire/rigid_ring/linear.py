@@ -34,24 +34,27 @@ def lateral_ring(tire, r_b, k_by, k_cy, k_bgamma, C_by, C_cy, C_bgamma):
 
 def lateral_ring_modes(tire, r_b, k_by, k_cy, k_bgamma, C_by, C_cy, C_bgamma, branch=None):
     """(f_n Hz, zeta) of the ring's lateral release (`lateral_ring`), oscillatory modes by frequency.
-    branch: None, or (beta, tau): each sidewall spring (k_by on y_b - y_a, k_bgamma on gamma_b) with a
-    Maxwell branch of stiffness beta k and relaxation time tau in parallel (internal states q, force
-    beta k (x - q), dq/dt = (x - q) / tau), as `model.RigidRing`."""
+    branch: None, or (beta, tau): each sidewall spring (k_by on y_b - y_a, k_bgamma on gamma_b) with
+    Maxwell branches of stiffness beta k and relaxation time tau in parallel (internal states q, force
+    beta k (x - q), dq/dt = (x - q) / tau), as `model.RigidRing`; beta, tau scalars (one branch, the
+    model's) or equal-length sequences (several, for comparisons)."""
     M, K, C = lateral_ring(tire, r_b, k_by, k_cy, k_bgamma, C_by, C_cy, C_bgamma)
-    if branch is None or not branch[0]:
-        f, z, _ = modes(M, K, C)
-        return f, z
-    beta, tau = branch
+    betas, taus = (np.zeros(0), np.zeros(0)) if branch is None else (np.atleast_1d(x).astype(float) for x in branch)
     d = np.array([[-1.0, 1.0, 0.0], [0.0, 0.0, 1.0]])  # the branches' deflections from (y_a, y_b, gamma_b)
-    kb = beta * np.diag([k_by, k_bgamma])
     Mi = np.linalg.inv(M)
-    A = np.zeros((8, 8))
+    n = 6 + 2 * betas.size
+    A = np.zeros((n, n))
     A[:3, 3:6] = np.eye(3)
-    A[3:6, :3] = -Mi @ (K + d.T @ kb @ d)
     A[3:6, 3:6] = -Mi @ C
-    A[3:6, 6:] = Mi @ d.T @ kb
-    A[6:, :3] = d / tau
-    A[6:, 6:] = -np.eye(2) / tau
+    k_tot = K.copy()
+    for j, (beta, tau) in enumerate(zip(betas, taus)):
+        kb = beta * np.diag([k_by, k_bgamma])
+        k_tot += d.T @ kb @ d
+        i = 6 + 2 * j
+        A[3:6, i:i + 2] = Mi @ d.T @ kb
+        A[i:i + 2, :3] = d / tau
+        A[i:i + 2, i:i + 2] = -np.eye(2) / tau
+    A[3:6, :3] = -Mi @ k_tot
     lam = np.linalg.eigvals(A)
     lam = lam[lam.imag > 1e-9]
     lam = lam[np.argsort(np.abs(lam))]
