@@ -102,10 +102,11 @@ def tread_damper(tire, r_b, k_by, k_cy, k_bgamma, C_by, C_bgamma, zeta_l, c_fall
     """(C_cy, source) of the ring's lateral tread damper (rigid-ring.md §5, revised). E07 and E08 measure
     the sidewall's C_by and C_bgamma; the tread's damper has no test of its own, and E09's release is
     the test that excites it: C_cy is set so the ring's linear lateral release (`linear.lateral_ring_modes`,
-    with the sidewall's Maxwell branches `branch` = (beta, tau) when it has them) has E09's fitted zeta_l (its damped-sine fit, the same reduction the validation applies to both
-    records): the smallest such C_cy in [0, c_max], bracketed on a grid, then bisected.
-    Fallback, named: c_fallback (k_cy C_l / k_l, the tread at E09's time constant) when zeta_l is
-    missing or no C_cy >= 0 reaches it (the sidewall's dampers alone give more)."""
+    with the sidewall's Maxwell branches `branch` = (beta, tau) when it has them) has E09's fitted zeta_l
+    (its damped-sine fit, the same reduction the validation applies to both records): the smallest such
+    C_cy in [0, c_max], bracketed on a grid, then bisected. Fallback, named: c_fallback (k_cy C_l / k_l,
+    the tread at E09's time constant) when zeta_l is missing or no C_cy >= 0 reaches it (the sidewall's
+    dampers alone give more)."""
     if not finite(r_b, k_by, k_cy, k_bgamma, C_by, C_bgamma):
         return c_fallback, "k_cy C_l / k_l (fallback: the ring's lateral springs or sidewall dampers are missing)"
     if not finite(zeta_l) or zeta_l <= 0:

@@ -35,9 +35,9 @@ contact relaxation length is a (study eq 5-17) and at V = 0 the patch is a tread
 = damp_vlow k_cx fades out linearly by V = VXLOW (MF-Swift DAMP_VLOW).
 Out-of-plane, "ring" (Chae; §6): belt y_b, gamma_b on the sidewall (k_by, C_by; k_bgamma,
 C_bgamma; each spring with a Maxwell branch beside it where the parameters have one: force
-k_branch (x - q), dq/dt = (x - q) / tau_branch, x the spring's deflection); the tread e between the belt's contact point y_b + r_l gamma_b and the patch,
-sigma_c de/dt + |V| e = sigma_c V_cy (damping folded in exactly, see `_tread_rate`),
-F_y = -(k_cy e + C_cy de/dt), sigma_c = k_f / k_cy. Steady: F_y = -k_f sin(alpha).
+k_branch (x - q), dq/dt = (x - q) / tau_branch, x the spring's deflection); the tread e between
+the belt's contact point y_b + r_l gamma_b and the patch, sigma_c de/dt + |V| e = sigma_c V_cy
+(damping folded in exactly, see `_tread_rate`), F_y = -(k_cy e + C_cy de/dt), sigma_c = k_f / k_cy. Steady: F_y = -k_f sin(alpha).
 Out-of-plane, "reduced" (§5 fallback, MF 6.1's own transient): no belt lateral DOFs; the rim
 (mass m_tot) on k_l || C_l to a single contact point with sigma = k_f / k_l. Do not mix with the
 ring's k_by, k_bgamma (the carcass compliance would count twice).
