@@ -2,18 +2,16 @@
 
 A characterization is the tire's reference data plus one row per condition (load x pressure) holding
 the SI quantities the virtual experiments E01-E11 and E13 produce, and the E10 curves of that condition.
-Any quantity may be missing (an experiment not run, or failed): the row then lacks the key or holds
-None, tables print "—" and whatever depends on it is None.
+Any quantity may be missing (an experiment not run, or failed): the row lacks it, or holds None.
 
-`characterization.json` layout (SI throughout; the writer adds "quantities" for the reader's eye,
-the reader ignores it):
+`characterization.json` layout (SI; the writer adds "quantities" for the reader's eye, the reader ignores it):
 
     {
       "format": "jtire.characterization", "version": 1,
       "tire": {"name": str, "m_b_kg", "m_tot_kg", "tire_mass_kg", "rim_mass_kg", "I_by_kgm2",
                "I_bx_kgm2", "I_ay_kgm2", "I_ax_kgm2", "unloaded_radius_m", "width_m",
                "rim_radius_m", "rim_width_m", "aspect_ratio", "rated_load_N", "rated_pressure_Pa",
-               "tire_Iy_kgm2", "tire_Ix_kgm2"},   # the last two optional
+               "tire_Iy_kgm2", "tire_Ix_kgm2", "relaxation_time_s"},   # the last three optional
       "quantities": {"k_sv_N_per_m": {"symbol": "k_sv", "unit": "N/m", "experiment": "E02",
                                       "meaning": "..."}, ...},
       "rows": [{"load_N": 45371.25, "pressure_Pa": 827371.0,
@@ -103,7 +101,7 @@ EXTRA_KEYS = ("deflection_m", "first_mode_fit_fn_Hz", "first_mode_xi", "k_dv_fit
               # E03's tandem cam (jtire.enveloping), fitted to its quasi-static crossing
               "ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order", "enveloping_fit_rms_height_m",
               "enveloping_max_height_m", "f_l_storage_Hz",  # f_l_storage: where k_l_storage's moduli are taken
-              "xi_l_fit")  # E09's release zeta (damped-sine fit): the ring's lateral tread damper is set to it
+              "xi_l_fit")  # E09's fitted release zeta: the ring's lateral tread damper (params.derive)
 CURVE_KEYS = ("slip_angle_deg", "lateral_force_N", "M_z_SAE_Nm", "F_z_N", "F_y_SAE_N", "F_x_N")
 CURVE_REQUIRED = ("slip_angle_deg", "lateral_force_N")
 SLIP_CURVE_KEYS = ("slip", "force_x_N", "force_z_N")
@@ -152,8 +150,7 @@ class TireInfo:
     # None where not known (the study gives neither; folders written before they were recorded)
     tire_Iy_kgm2: float | None = None
     tire_Ix_kgm2: float | None = None
-    # the rubber's longest Prony relaxation time (s): the ring's lateral Maxwell branches (None: not known)
-    relaxation_time_s: float | None = None
+    relaxation_time_s: float | None = None  # the rubber's longest Prony time (s): the ring's lateral branches
 
     @classmethod
     def from_reference(cls, reference=None, tire_toml=None) -> "TireInfo":
