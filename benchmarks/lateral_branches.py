@@ -14,7 +14,6 @@ Prints one markdown table (numpy only, a second).
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -26,6 +25,8 @@ def main(argv=None):
     ap.add_argument("char_dir", help="a finished characterization folder (jtire characterize --out DIR)")
     a = ap.parse_args(argv)
     from jtire import units as U
+    from jtire.materials import prony_weights
+    from jtire.rigid_ring.identify import branch_storage, sidewall_stiffening
     from jtire.rigid_ring.linear import lateral_ring_modes
     from jtire.rigid_ring.params import derive
     from jtire.rigid_ring.table import read_characterization
@@ -41,13 +42,14 @@ def main(argv=None):
         row = char.row(kg * U.G0, psi * U.PSI)
         d = derive(row, char.tire, lateral_springs="static")
         f_s, r, z_e09 = row.get("f_l_storage_Hz"), d.lateral_storage_ratio, row.get("xi_l_fit")
-        if None in (f_s, r, d.k_cy):
+        s = None if None in (f_s, r, d.k_cy) else sidewall_stiffening(d.k_l, d.k_by, d.k_bgamma, d.k_cy, d.r_b, r)
+        if s is None:
             print(f"| {kg:g} kg, {psi:g} psi | — | (no storage push or lateral springs in the row) | | | |")
             continue
-        s = (1 / d.k_by + d.r_b**2 / d.k_bgamma) / (1 / (r * d.k_l) - 1 / d.k_cy)  # the sidewall's stiffening at f_s
-        for name, tt in ((f"one, {taus[-1] * 1e3:g} ms", taus[-1:]), (f"{taus.size}, the Prony series' weights", taus)):
-            x2 = (2 * math.pi * f_s * tt) ** 2
-            betas = np.full(tt.shape, (s - 1) / np.sum(x2 / (1 + x2)))
+        for name, tt, w in ((f"one, {taus[-1] * 1e3:g} ms", taus[-1:], np.ones(1)),
+                            (f"{taus.size}, the Prony series' weights", taus, prony_weights(taus))):
+            # weights w, scaled so the branches' storage at f_s is the sidewall's stiffening s
+            betas = (s - 1) * w / sum(wi * (branch_storage(1.0, ti, f_s) - 1) for wi, ti in zip(w, tt))
             args = (char.tire, d.r_b, d.k_by, d.k_cy, d.k_bgamma)
             f0, z0 = lateral_ring_modes(*args, 0.0, 0.0, 0.0, (betas, tt))
             _, z1 = lateral_ring_modes(*args, d.C_by, 0.0, d.C_bgamma, (betas, tt))

@@ -16,7 +16,7 @@ from .params import derive
 
 def _lateral_zeta(cx, c):
     d = cx.d
-    if (d.C_cy_source or "").startswith("E09") and None not in (d.k_by, d.k_cy, d.k_bgamma, d.C_by, d.C_cy, d.C_bgamma):
+    if d.tread_damper_identified:  # (identified: every lateral spring and damper is there)
         f_r, z_r = lateral_modes(d, "ring")[0]
         if _within(f_r, cx.val("lateral.f_Hz", "ring"), 0.02):  # the validation ran the ring variant
             txt = (f"the ring's tread damper C_cy = {_n(d.C_cy, 'N s/m')} is set from this release ({d.C_cy_source}): "
@@ -251,7 +251,7 @@ def _step_s63(cx, c):
         f_b = v_here / (2 * math.pi * d.sigma)
         parts.append(f"the sidewall's Maxwell branches (tau {1e3 * d.lateral_branch[1]:.3g} ms) make the ring's k_l x "
                      f"{d.k_l_at(f_b) / d.k_l:.4g} at the build-up's V/(2 pi sigma) = {_n(f_b, 'Hz')} (x "
-                     f"{d.k_l_at(_storage_f(cx) or f_b) / d.k_l:.4g} at the lateral mode)")
+                     f"{d.k_l_at(_storage_f(cx)) / d.k_l:.4g} at the lateral mode)")  # (a branch needs f_l_storage)
     if s_str:
         state = _verdict(s_str, c.shell, c.ring, c.tolerance)
     for vo in [v for v in _speeds(cx) if v != v_here]:

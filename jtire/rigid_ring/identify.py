@@ -134,27 +134,39 @@ def tread_damper(tire, r_b, k_by, k_cy, k_bgamma, C_by, C_bgamma, zeta_l, c_fall
     return 0.5 * (lo + hi), f"E09's release zeta {zeta_l:.3g} (damped-sine fit) with E07's C_by and E08's C_bgamma"
 
 
+def branch_storage(beta, tau, f_hz):
+    """A spring k with a Maxwell branch (beta k, relaxation time tau) beside it, on its storage at f_hz:
+    k x (1 + beta x^2 / (1 + x^2)), x = 2 pi f tau. Returns that factor."""
+    x2 = (2.0 * math.pi * f_hz * tau) ** 2
+    return 1.0 + beta * x2 / (1.0 + x2)
+
+
+def sidewall_stiffening(k_l, k_by, k_bgamma, k_cy, r_b, storage_ratio):
+    """The factor s on both sidewall springs that makes the ring's series lateral stiffness (rim camber
+    held, tread k_cy unchanged) storage_ratio x k_l: 1/(storage_ratio k_l) = 1/k_cy + (1/k_by +
+    r_b^2/k_bgamma) / s. None when the tread alone is softer than that."""
+    rest = 1.0 / (storage_ratio * k_l) - 1.0 / k_cy
+    return (1.0 / k_by + r_b**2 / k_bgamma) / rest if rest > 0 else None
+
+
 def maxwell_branch(k_l, k_by, k_bgamma, k_cy, r_b, storage_ratio, f_storage, tau):
     """((beta, tau), source) of the sidewall's lateral Maxwell branches (rigid-ring.md §5, revised), or
     (None, why). E07-E09 push statically (the rubber's long-term moduli); E09's push on the storage
     moduli at its release frequency f_storage gives k_l' = storage_ratio k_l. The ring keeps its static
     springs, so E09's static deflection and the slip step's slow build-up see them, and puts a Maxwell
     branch (stiffness beta k, relaxation time tau) beside k_by and k_bgamma, with beta such that at
-    f_storage the ring's series stiffness (tread k_cy unchanged) is k_l':
-        1/k_l' = 1/k_cy + (1/k_by + r_b^2/k_bgamma) / s,  s = 1 + beta x^2 / (1 + x^2),  x = 2 pi f tau.
-    The tread's own stiffening is carried by the sidewall's branches (the tread string has none)."""
+    f_storage the sidewall's `branch_storage` is the `sidewall_stiffening` that gives k_l' (tread k_cy
+    unchanged: the tread's own stiffening is carried by the sidewall's branches)."""
     if not finite(storage_ratio, f_storage) or storage_ratio <= 1.0 or f_storage <= 0:
         return None, "no push on the storage moduli in the row (k_l_storage, f_l_storage_Hz), or k_l' <= k_l"
     if not finite(tau) or tau <= 0:
         return None, "no relaxation time in the characterization's tire (an older folder)"
     if not finite(k_l, k_by, k_bgamma, k_cy, r_b):
         return None, "the lateral springs are missing"
-    side = 1.0 / k_by + r_b**2 / k_bgamma
-    rest = 1.0 / (storage_ratio * k_l) - 1.0 / k_cy
-    if not rest > 0:
+    s = sidewall_stiffening(k_l, k_by, k_bgamma, k_cy, r_b, storage_ratio)
+    if s is None:
         return None, f"the tread's k_cy alone is softer than k_l' = {storage_ratio * k_l:.4g} N/m"
-    x = 2.0 * math.pi * f_storage * tau
-    beta = (side / rest - 1.0) * (1.0 + x * x) / (x * x)
+    beta = (s - 1.0) / (branch_storage(1.0, tau, f_storage) - 1.0)  # branch_storage is linear in beta
     return (beta, tau), (f"static pushes with a Maxwell branch beside k_by and k_bgamma (beta {beta:.4g}, tau "
                          f"{tau * 1e3:.4g} ms): k_l x {storage_ratio:.4g} at {f_storage:.4g} Hz, E09's release on the "
                          f"storage moduli")

@@ -3,8 +3,7 @@ docs/rigid-ring.md §3, §5 and §7, and the equinox Module the model integrates
 
 `derive(row, tire)` gives a `Derived` record (Python floats, None where an input is missing; used by
 the tables and the .tir export). `RigidRingParams.from_derived(d)` gives the model's parameters (jax
-float64 leaves; `Derived.missing(group)` names what a scenario
-lacks; a missing input is a finite placeholder, see `_leaf`).
+float64 leaves; `Derived.missing(group)` names what a scenario lacks; a missing input is a placeholder).
 
 Vertical split (§3, revised; `identify`): the dynamic springs use E02's tangent k_vt at the load (the
   secant k_sv without one, named in stiffness_source), 1/k_vt = 1/k_bz + 1/k_vr; variant A (k_dv = k_bz
@@ -24,8 +23,7 @@ Lateral springs: E07-E09 push statically (the rubber's long-term moduli); the la
   release frequency) gives r = k_l_storage / k_l. lateral_springs="maxwell" (the default) keeps the
   static pushes and puts a Maxwell branch beside k_by and k_bgamma (`identify.maxwell_branch`, tau the
   rubber's longest relaxation time) so that the ring's k_l is r k_l at that frequency: static at rest,
-  stiffer at the mode. "storage" takes k_by, k_bgamma, k_l x r (k_cy x r follows); "static" neither.
-  k_l_static is E09's value.
+  stiffer at the mode. "storage" takes k_by, k_bgamma, k_l x r; "static" neither. k_l_static: E09's k_l.
 """
 
 import dataclasses
@@ -35,7 +33,8 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from ..errors import ConfigError
-from .identify import damping_split, maxwell_branch, mz_curve, residual_spring, tread_damper, vertical_split
+from .identify import branch_storage, damping_split, maxwell_branch, mz_curve, residual_spring, tread_damper
+from .identify import vertical_split
 from .identify import finite as _ok
 from .table import ConditionRow, TireInfo
 
@@ -122,19 +121,21 @@ class Derived:
     lateral_branch: tuple | None = None  # (beta, tau s): the sidewall's lateral Maxwell branches (`maxwell_branch`)
 
     @property
-    def branch_beta(self) -> float | None:
-        """The sidewall's lateral Maxwell branches' stiffness ratio beta (None: no branch)."""
+    def branch_beta(self) -> float | None:  # the lateral Maxwell branches' stiffness ratio (None: none)
         return None if self.lateral_branch is None else self.lateral_branch[0]
+
+    @property
+    def tread_damper_identified(self) -> bool:
+        """C_cy from E09's release zeta (`identify.tread_damper`), not the k_cy C_l / k_l fallback."""
+        return (self.C_cy_source or "").startswith("E09")
 
     def k_l_at(self, f_hz: float) -> float | None:
         """The ring's lateral stiffness (rim camber held) on the springs' storage at f_hz: the Maxwell
-        branches (when it has them) stiffen the sidewall by 1 + beta x^2 / (1 + x^2), x = 2 pi f tau."""
+        branches (when it has them) stiffen the sidewall springs by `identify.branch_storage`."""
         if not _ok(self.k_cy, self.k_by, self.k_bgamma, self.r_b):
             return None
-        beta, tau = self.lateral_branch or (0.0, 1.0)
-        x2 = (2.0 * math.pi * f_hz * tau) ** 2
-        side = (1.0 / self.k_by + self.r_b**2 / self.k_bgamma) / (1.0 + beta * x2 / (1.0 + x2))
-        return 1.0 / (1.0 / self.k_cy + side)
+        s = branch_storage(*(self.lateral_branch or (0.0, 1.0)), f_hz)
+        return 1.0 / (1.0 / self.k_cy + (1.0 / self.k_by + self.r_b**2 / self.k_bgamma) / s)
 
     def residual_deflection(self, force: float) -> float:
         """The residual spring's deflection (m) under a contact force (N): the root of
@@ -199,9 +200,8 @@ class Derived:
 
 
 def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "maxwell") -> Derived:
-    """The derived quantities of one row. lateral_springs: "maxwell" (the default: E07-E09's pushes with
-    the sidewall's Maxwell branches where the row and tire allow, else "static"), "static" (E07-E09's
-    pushes) or "storage" (all three x the row's k_l_storage / k_l when it has one); the module docstring."""
+    """The derived quantities of one row. lateral_springs: "maxwell" (the default), "static" or "storage"
+    (the module docstring)."""
     if lateral_springs not in LATERAL_SPRINGS:
         raise ConfigError(f"lateral_springs = {lateral_springs!r}: must be one of {', '.join(LATERAL_SPRINGS)}")
     g = row.get

@@ -156,7 +156,7 @@ def markdown(char: Characterization, plane: str) -> str:
                       ("series" if d.k_cy_source.startswith("series") else "fallback sigma_c = a")))
         items.append(("k_l' / k_l", lambda r, d: _fmt(d.lateral_storage_ratio)))
         items.append(("C_cy from", lambda r, d: DASH if d.C_cy_source is None else
-                      ("E09's zeta" if d.C_cy_source.startswith("E09") else "k_cy C_l / k_l (fallback)")))
+                      ("E09's zeta" if d.tread_damper_identified else "k_cy C_l / k_l (fallback)")))
     for label, fn in items:
         for i, load in enumerate(loads):
             lines.append(f"| {label if i == 0 else ''} | {load / U.G0:.1f} | "
