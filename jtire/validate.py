@@ -23,10 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import results, spectra
+from . import results, slip_reading, spectra
 from . import units as U
 
 DEFAULT_CONDITIONS = ((4625.0, 120.0), (2312.5, 120.0), (4625.0, 70.0))  # (kg, psi): rated, light, soft
+RING_STEP_SIGMAS = 8.0  # relaxation lengths the ring's slip step rolls when no shell record sets the distance
 BELT_BAND_HZ = (40.0, 300.0)  # where the belt's vertical mode is looked for: above the bounce
 
 
@@ -96,22 +97,39 @@ def shell_metrics(char_dir, load_N, pressure_Pa) -> tuple:
     return m, sig
 
 
-def step_metrics(result, speeds=(5.0, 15.0)) -> tuple:
+def step_metrics(result, speeds=(5.0, 15.0), f_lateral_Hz=None) -> tuple:
+    """(metrics, figure signals) of the shell's slip step, read from its signals by `jtire.slip_reading`
+    with the steady window of `step_tail` (the ring's scenario is read with the same)."""
     m, sig = {}, {}
-    q, s = result.quantities, result.signals
+    s = result.signals
     for v in speeds:
         k = f"{v:g}"
-        m |= {f"step_{k}.F_y_steady_N": q[f"F_y_steady_SAE_N_{k}"], f"step_{k}.M_z_steady_Nm": q[f"M_z_steady_SAE_Nm_{k}"],
-              f"step_{k}.s63_m": q[f"s63_m_{k}"]}
+        dist = s[f"distance_m_{k}"]
+        r = slip_reading.readings(dist, s[f"F_y_SAE_N_{k}"], s[f"M_z_SAE_Nm_{k}"],
+                                  step_tail(v, f_lateral_Hz, float(dist[-1])))
+        m |= {f"step_{k}.F_y_steady_N": r["F_y_steady_SAE_N"], f"step_{k}.M_z_steady_Nm": r["M_z_steady_SAE_Nm"],
+              f"step_{k}.s63_m": r["s63_m"]}
         sig[f"step_{k}"] = (s[f"distance_m_{k}"], s[f"F_y_SAE_N_{k}"])
     return m, sig
 
 
-def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ, lateral="ring", contact=None) -> dict:
+def step_tail(speed, f_lateral_Hz, record_m=None) -> float | None:
+    """The slip step's steady window in the validation (m): one period of the shell's lateral release
+    mode (E09) rolled at `speed`, on both sides, since both records still ring in that mode at their ends
+    (`jtire.slip_reading`), and at most half the record_m rolled (a short record: its second half);
+    None (the last 5 %) without E09's frequency."""
+    w = slip_reading.tail_for(speed, f_lateral_Hz)
+    return w if w is None or record_m is None else min(w, 0.5 * float(record_m))
+
+
+def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ, lateral="ring", contact=None, f_lateral_Hz=None,
+                 step_distance_m=None) -> dict:
     """The ring's scenarios; belt_band_Hz: where its drop looks for the belt mode (the shell's band,
     or the full BELT_BAND_HZ when the shell has none); lateral: the ring's out-of-plane model in the
     lateral release and the slip step ("ring": belt DOFs, or "reduced"); contact: its tread in the
-    rolling ones ("string", "lag"; None: the model's default)."""
+    rolling ones ("string", "lag"; None: the model's default); f_lateral_Hz: the shell's lateral release
+    frequency, which sets the slip step's steady window (`step_tail`); step_distance_m: how far the ring's
+    step rolls (the shell's record; None: RING_STEP_SIGMAS relaxation lengths)."""
     from .rigid_ring import scenarios as sc
     from .rigid_ring.model import CONTACT
     from .rigid_ring.params import derive
@@ -120,8 +138,10 @@ def ring_results(row, tire_info, belt_band_Hz=BELT_BAND_HZ, lateral="ring", cont
     d = derive(row, tire_info)
     out = {"drop": sc.drop_test(d, f_band=tuple(belt_band_Hz)), "drum": sc.drum_cleat(d, contact=contact),
            "lateral": sc.lateral_release(d, lateral=lateral)}
+    dist = step_distance_m if step_distance_m is not None or d.sigma is None else RING_STEP_SIGMAS * d.sigma
     for v in (5.0, 15.0):
-        out[f"step_{v:g}"] = sc.slip_step(d, speed=v, lateral=lateral, contact=contact)
+        out[f"step_{v:g}"] = sc.slip_step(d, speed=v, lateral=lateral, contact=contact,
+                                          tail_m=step_tail(v, f_lateral_Hz, dist), distance_m=dist)
     return out
 
 
@@ -308,12 +328,15 @@ def validate(char_dir, plan, conditions=DEFAULT_CONDITIONS, slip_step_table=None
     for c, st, (shell, s_sig) in zip(conds, steps, shells):
         row = char.row(c["load_N"], c["pressure_Pa"])
         error = st if isinstance(st, str) else None
+        f_lat = shell.get("lateral.f_Hz")
         if error is None:
-            m, sg = step_metrics(st)
+            m, sg = step_metrics(st, f_lateral_Hz=f_lat)
             shell |= m
             s_sig |= sg
         band = s_sig.pop("drop_band_Hz", None) or BELT_BAND_HZ
-        rr = ring_results(row, char.tire, band) if row is not None else {}
+        # the ring rolls as far as the shell's record (the same input), read over the same window
+        dist = None if error else st.info.get("distance_m")
+        rr = ring_results(row, char.tire, band, f_lateral_Hz=f_lat, step_distance_m=dist) if row is not None else {}
         rows = validation.compare(shell, validation.ring_metrics(rr), failed=("step_",) if error else ())
         out.append((c, rows, s_sig, validation.ring_signals(rr), error))
     return out

@@ -75,7 +75,7 @@ def fake_runs(monkeypatch, fail_loads_kg=(), steady=None):
 
     monkeypatch.setattr(batch, "run", run)
     monkeypatch.setattr("jtire.tire.make_tire", lambda spec: None)
-    monkeypatch.setattr("jtire.validate.ring_results", lambda *a: {})
+    monkeypatch.setattr("jtire.validate.ring_results", lambda *a, **k: {})
     return ran
 
 

@@ -1,9 +1,9 @@
 """Slip-angle step while rolling (rigid-ring validation, docs/rigid-ring.md §8.3; not one of the study's
 twelve): the tire rolls straight on the flat-track machine (`stages.rolling_plan` at 0 deg, the damping
 ramped off), then the road's direction steps to the slip angle at once and the lateral force builds up
-over the rolled distance. Reported like the ring's scenario (`rigid_ring.scenarios.slip_step`): steady
-F_y and M_z (SAE, the last 5 % of the record), the distance s63 to 63 % of the steady F_y (~ the
-relaxation length sigma; it must not change with speed), and the overshoot. Case aux: the speed (m/s).
+over the rolled distance. Read like the ring's scenario (`rigid_ring.scenarios.slip_step`), by
+`jtire.slip_reading`: steady F_y and M_z (SAE, the last 5 % of the record), the distance s63 to 63 % of
+the steady F_y (~ the relaxation length sigma; it must not change with speed), and the overshoot. Case aux: the speed (m/s).
 """
 
 import equinox as eqx
@@ -11,6 +11,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import slip_reading
 from .. import units as U
 from ..schema import Field
 from .loads import DOWN, RIM_Z_SPIN, lateral_sae
@@ -18,7 +19,6 @@ from .phases import flat_road, make_drive
 from .program import Phase, f64
 from .result import ExperimentResult
 from .stages import ROLLING_SCHEMA, Rolling, road_velocity, rolling_plan
-
 
 PER_SPEED = ("F_y_steady_SAE_N", "M_z_steady_SAE_Nm", "s63_m", "overshoot", "F_y_tail_drift_rel")  # + _<speed>
 
@@ -87,17 +87,9 @@ class SlipStep(Rolling):
             fy = lateral_sae(a, f[:, 0], f[:, 1])
             mz = -m
             s = v * (t - t[0])
-            tail = t >= t[-1] - 0.05 * (t[-1] - t[0])
-            fy_ss, mz_ss = float(fy[tail].mean()), float(mz[tail].mean())
-            frac = fy / fy_ss
-            hit = np.flatnonzero((frac >= 0.632) & (s > 0))
-            s63 = None
-            if hit.size and hit[0] > 0:
-                i = int(hit[0])
-                s63 = float(np.interp(0.632, [frac[i - 1], frac[i]], [s[i - 1], s[i]]))
+            r = slip_reading.readings(s, fy, mz)
             key = f"{v:g}"
-            values = (fy_ss, mz_ss, s63, float(np.max(frac[s > 0]) - 1.0), float(np.ptp(fy[tail]) / abs(fy_ss)))
-            q |= {f"{n}_{key}": x for n, x in zip(PER_SPEED, values, strict=True)}
+            q |= {f"{n}_{key}": r[n] for n in PER_SPEED}
             sig |= {f"distance_m_{key}": s, f"F_y_SAE_N_{key}": fy, f"M_z_SAE_Nm_{key}": mz}
         q |= {"slip_angle_deg": float(np.degrees(a)), "load_N": condition["load_N"]}
         return ExperimentResult(self.name, condition, q, signals=sig, checks=checks,

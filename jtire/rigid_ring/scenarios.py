@@ -13,7 +13,7 @@ import math
 import jax.numpy as jnp
 import numpy as np
 
-from .. import enveloping, spectra
+from .. import enveloping, slip_reading, spectra
 from .. import signals as sig
 from ..errors import ConfigError, SimulationError
 from ..physics.drum import cleat_half_chord
@@ -240,17 +240,21 @@ def lateral_release(d: Derived, force=5e3, lateral="reduced", duration=0.5, n_sa
 
 
 def slip_step(d: Derived, speed=15.0, alpha_deg=2.0, lateral="reduced", t_step=0.01, t_ramp=0.005,
-              distance_sigmas=8.0, n_save=4001, contact=CONTACT):
+              distance_sigmas=8.0, n_save=4001, contact=CONTACT, tail_m=None,
+              distance_m=None):
     """Rolling at `speed` under the condition's load (rim z free with the load force, y/camber/steer
     held), slip angle stepped 0 -> alpha_deg (SAE) by a half-cosine over t_ramp. Distance s = V t
     counted from the middle of the ramp. Returns steady F_y, M_z (SAE), the distance to 63 % of the
-    steady F_y, the overshoot, and the implied values (k_f sin a, k_m sin a, sigma)."""
+    steady F_y, the overshoot, and the implied values (k_f sin a, k_m sin a, sigma): `jtire.slip_reading`, its
+    steady values over the record's last tail_m metres (None: its last 5 %). The record rolls distance_m
+    after the step (None: distance_sigmas relaxation lengths)."""
     grp = "lateral_ring" if lateral == "ring" else "lateral_reduced"
     m = _model(d, lateral, grp, "slip-angle step", contact)
     d.require("inplane", "slip-angle step")
     eq = vertical_equilibrium(d, d.load_N)
     a_sae = math.radians(alpha_deg)
-    duration = t_step + t_ramp + distance_sigmas * d.sigma / speed
+    rolled = distance_sigmas * d.sigma if distance_m is None else float(distance_m)
+    duration = t_step + t_ramp + rolled / speed
     drive = Drive.make(free=("z_a", "theta_a"), rim_force=np.eye(10)[IDX["z_a"]] * -d.load_N, V=speed,
                        alpha_iso=-a_sae, t_alpha=t_step, t_ramp=t_ramp)
     omega = speed / d.r_e
@@ -260,16 +264,7 @@ def slip_step(d: Derived, speed=15.0, alpha_deg=2.0, lateral="reduced", t_step=0
     out = _np(m.outputs(jnp.asarray(ts), jnp.asarray(ys), drive))
     fy_sae, mz_sae = -out["F_y"], -out["M_z"]
     s = speed * (ts - (t_step + 0.5 * t_ramp))
-    tail = ts >= ts[-1] - 0.05 * (ts[-1] - t_step)
-    fy_ss, mz_ss = float(fy_sae[tail].mean()), float(mz_sae[tail].mean())
-    frac = fy_sae / fy_ss
-    hit = np.flatnonzero((frac >= 0.632) & (s > 0))
-    s63 = None
-    if hit.size:
-        i = int(hit[0])
-        s63 = float(np.interp(0.632, [frac[i - 1], frac[i]], [s[i - 1], s[i]]))
-    q = {"F_y_steady_SAE_N": fy_ss, "M_z_steady_SAE_Nm": mz_ss, "s63_m": s63,
-         "overshoot": float(np.max(frac[s > 0]) - 1.0), "F_y_tail_drift_rel": float(np.ptp(fy_sae[tail]) / abs(fy_ss))}
+    q = slip_reading.readings(s, fy_sae, mz_sae, tail_m)
     # reduced model with the lag: the force k_l e + C_l de/dt obeys dF/dt = k_l (V_cy - V F / k_f)
     # exactly, a first-order lag over the distance sigma = k_f / k_l, plus a small jump C_l V_cy at
     # the step (so s63 comes out slightly below sigma); with the string, Pacejka's stretched string
