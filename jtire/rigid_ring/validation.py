@@ -8,7 +8,9 @@ Tolerances, fixed before any comparison (relative, |ring / shell - 1|):
   aligning moment is a small difference of large contact moments in the shell model); distance to
   63 % of steady F_y (~ sigma) 10 %; the drum-cleat peak-to-peak F_z and F_x 20 % (the doc's §8),
   judged only when the ring rolls over the cleat through E03's tandem cam (a point contact on the
-  cleat's profile is no enveloping model: its peak-to-peak is listed, "not compared").
+  cleat's profile is no enveloping model: its peak-to-peak is listed, "not compared"). The slip
+  step's steady values are read on both sides over one period of the shell's lateral mode rolled
+  at the step's speed (`jtire.validate.step_tail`): both records still ring in it at their ends.
 
 Both sides are dicts {metric name: value}; `ring_metrics(results)` builds the ring's from the
 scenario results, and the shell side must use the same names (METRICS).
