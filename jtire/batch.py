@@ -15,7 +15,6 @@ one per core at import (`JTIRE_CPU_DEVICES` overrides). On a GPU it runs unchang
 `jax.devices()`. Several hosts (`jax.distributed`) are not supported: see docs/experiments.md.
 """
 
-import contextlib
 import dataclasses
 import time
 
@@ -48,17 +47,16 @@ def simulate_batch(exp, model, params, cases: Case, *, params_batched: bool = Fa
     return jax.vmap(lambda p, c: exp.simulate(model, p, c), in_axes=(0 if params_batched else None, 0))(params, cases)
 
 
-def _case_by_case(exp, model, params, cases: Case, params_batched: bool, device: int = 0):
+def _case_by_case(exp, model, params, cases: Case, params_batched: bool):
     """The cases of a batch one after another, unbatched (the static solves): under vmap a Newton
     loop's conditional steps (refactorize or not, GMRES restarts) become selects that run both
     branches, so a vmapped solve costs several times an unbatched one even for one case
     (docs/design-notes.md). One compiled program serves any batch size."""
     n = jax.tree_util.tree_leaves(cases)[0].shape[0]
-    # as for the vmapped batches: the context is part of a trace's key, and device 0 traces without it
-    # (a transient started from a static state then shares the phase program of the vmapped runs)
-    with jax.default_device(jax.devices()[device]) if device else contextlib.nullcontext():
-        outs = [jax.device_get(exp.simulate(model, _index(params, i) if params_batched else params, _index(cases, i)))
-                for i in range(n)]
+    # the cases are committed to their device (`shard`), so the programs run there; no default-device
+    # context, which is part of a trace's key: every device then shares one trace of each program
+    outs = [jax.device_get(exp.simulate(model, _index(params, i) if params_batched else params, _index(cases, i)))
+            for i in range(n)]
     return jax.tree_util.tree_map(lambda *a: np.stack(a), *outs)
 
 
@@ -164,13 +162,12 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
         params = shard(_stack([plist[flat[k][0]] for k in padded]), n_dev, dev0) if params_batched else plist[0]
         t0 = time.perf_counter()
         if exp.shardable:
-            # on another device than the first, what the plan creates between phases goes there too (the
-            # context is part of a trace's key: device 0 keeps the programs traced without it)
-            with jax.default_device(jax.devices()[dev0]) if dev0 else contextlib.nullcontext():
-                outs = jax.device_get(simulate_batch(exp, model, params, shard(cases, n_dev, dev0),
-                                                     params_batched=params_batched))
+            # the cases committed to dev0 take the programs there, and what the plan makes between phases
+            # follows them; no default-device context (part of a trace's key): one trace for every device
+            outs = jax.device_get(simulate_batch(exp, model, params, shard(cases, n_dev, dev0),
+                                                 params_batched=params_batched))
         else:
-            outs = _case_by_case(exp, model, params, shard(cases, 1, dev0), params_batched, dev0)
+            outs = _case_by_case(exp, model, params, shard(cases, 1, dev0), params_batched)
         return chunk, outs, time.perf_counter() - t0
 
     pending = {}  # condition index -> {case index: outputs} (a condition may have several cases)
