@@ -46,6 +46,10 @@ class TirError(Exception):  # a problem with the .tir: the message names the fil
     pass
 
 
+class NoCurves(TirError):  # a readable characterization.json without the curves asked for
+    pass
+
+
 def parse_tir(path):
     """{SECTION: {KEY: value}} of a .tir: `[SECTION]` headers, `KEY = value` lines, `$` (and `!`)
     start a comment, quoted values are strings, the rest floats (kept as text when not a number).
@@ -187,7 +191,7 @@ def curve_rows(path, key, nompres, every_pressure=False):
     except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
         raise TirError(f"{path}: not a readable characterization.json ({type(e).__name__}: {e})") from None
     if not out:
-        raise TirError(f"{path}: no row {'' if every_pressure else f'at NOMPRES = {nompres:g} Pa '}carries {key}")
+        raise NoCurves(f"{path}: no row {'' if every_pressure else f'at NOMPRES = {nompres:g} Pa '}carries {key}")
     return sorted(out, key=lambda x: (x[1], x[0]))
 
 

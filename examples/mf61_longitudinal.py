@@ -14,6 +14,9 @@ absent. Signs ISO-W: kappa > 0 drives, F_x > 0.
 points, each less its free-rolling F_x (the rolling resistance, which MF carries in M_y, not F_x0),
 and one line per row gives the largest |F_x0 - F_x| over 0-10 % slip in % of the curve's peak.
 --all-pressures: every row with E06 curves, each evaluated at its own pressure.
+With --curves, the rows' E12 rolling resistance (when recorded) is compared with the file's rolling-resistance
+moment (4.E70, at V_x = LONGVL, F_x = 0, camber 0) as the hub drag of a free-rolling wheel, |M_y| / R_l,
+R_l = R0 - rho with rho the file's own static deflection at F_z (MF 6.1's F_z(rho) with Q_FZ2 and PFZ1).
 
 Usage: python examples/mf61_longitudinal.py TIR_FILE --out PNG [--loads-kN 20,45.4,68] [--curves JSON [--all-pressures]]
 Exits 2 with one line on stderr naming the file (and key) when a file is missing or unreadable, or the
@@ -27,12 +30,14 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from mf61_lateral import TirError, curve_rows, loads_asked, numbers, parse_tir  # noqa: E402  (the sibling script's reader)
+from mf61_lateral import NoCurves, TirError, curve_rows, loads_asked, numbers, parse_tir  # noqa: E402  (the sibling script's reader)
 
 FX_KEYS = ("FNOMIN", "NOMPRES", "PCX1", "PDX1", "PDX2", "PEX1", "PEX2", "PEX3", "PEX4", "PKX1", "PKX2", "PKX3",
            "PHX1", "PHX2", "PVX1", "PVX2")
 SCALING = ("LFZO", "LCX", "LMUX", "LEX", "LKX", "LHX", "LVX")
 PRESSURE = ("PPX1", "PPX2", "PPX3", "PPX4")  # 0 when absent: no pressure dependence
+MY_KEYS = ("UNLOADED_RADIUS", "VERTICAL_STIFFNESS", "QSY1", "QSY7")
+MY_OPTIONAL = ("QSY3", "QSY4", "QSY8", "Q_FZ2", "PFZ1")  # 0 when absent
 
 
 def coefficients(path, tir):
@@ -62,6 +67,26 @@ def longitudinal(c, fz, kappa, dpi=0.0):
     return {"fx": fx, "kxk": kxk, "dx": dx}
 
 
+def rolling_drag(c, fz, dpi=0.0):
+    """The free-rolling hub drag |M_y| / R_l (N) at F_z, dp_i: M_y by (4.E70) at V_x = LONGVL, F_x = 0,
+    camber 0; R_l = R0 - rho, F_z = FNOMIN (1 + PFZ1 dp_i)(Q_FZ1 rho/R0 + Q_FZ2 (rho/R0)^2)."""
+    r0, fz0 = c["UNLOADED_RADIUS"], c["FNOMIN"]
+    q1 = np.sqrt((c["VERTICAL_STIFFNESS"] * r0 / fz0) ** 2 - 4 * c["Q_FZ2"])
+    f = fz / (fz0 * (1 + c["PFZ1"] * dpi))
+    x = f / q1 if c["Q_FZ2"] == 0 else (-q1 + np.sqrt(q1 * q1 + 4 * c["Q_FZ2"] * f)) / (2 * c["Q_FZ2"])
+    p_ratio = 1 + dpi  # p / NOMPRES
+    my = r0 * fz0 * (c["QSY1"] + c["QSY3"] + c["QSY4"]) * (fz / fz0) ** c["QSY7"] * p_ratio ** c["QSY8"]
+    return my / (r0 * (1 - x))
+
+
+def simulated_drag(path, nompres, every_pressure=False):
+    """[(F_z, dp_i, E12's drag)] of the rows that record one, or [] (an older characterization)."""
+    try:
+        return [(fz, dpi, float(d)) for fz, dpi, d in curve_rows(path, "rolling_resistance_N", nompres, every_pressure)]
+    except NoCurves:
+        return []
+
+
 def simulated_curves(path, nompres, every_pressure=False):
     """[(F_z, dp_i, kappa, F_x - F_x(0))] of the characterization's rows at NOMPRES (every_pressure: at
     every pressure) with E06 curves."""
@@ -89,7 +114,13 @@ def main(argv=None):
         ap.error("--all-pressures compares curves: give --curves too")
     try:
         c = coefficients(args.tir, parse_tir(args.tir))
-        sim = simulated_curves(args.curves, c["NOMPRES"], args.all_pressures) if args.curves else []
+        drag = simulated_drag(args.curves, c["NOMPRES"], args.all_pressures) if args.curves else []
+        try:  # a characterization with E12 but no E06 (e.g. experiments = ["rolling_resistance"]) compares the drag only
+            sim = simulated_curves(args.curves, c["NOMPRES"], args.all_pressures) if args.curves else []
+        except NoCurves:
+            if not drag:
+                raise
+            sim = []
     except TirError as e:
         print(f"mf61_longitudinal: {e}", file=sys.stderr)
         return 2
@@ -108,6 +139,17 @@ def main(argv=None):
         err = np.max(np.abs(longitudinal(c, fz, k[w], dpi)["fx"] - f[w])) / max(np.max(np.abs(f)), 1e-9)
         at = f" at {c['NOMPRES'] * (1 + dpi) / 1e3:.0f} kPa" if args.all_pressures else ""
         print(f"{fz:12.2f} N{at}: max |F_x0 - F_x| over 0-10 % slip = {100 * err:.2f} % of the curve's peak")
+    if drag:
+        try:
+            cy = numbers(args.tir, parse_tir(args.tir), MY_KEYS + ("FNOMIN",), (), "M_y", MY_OPTIONAL)
+        except TirError as e:
+            print(f"mf61_longitudinal: {e}", file=sys.stderr)
+            return 2
+        for fz, dpi, d in drag:  # the rolling-resistance moment against E12's drag
+            at = f" at {c['NOMPRES'] * (1 + dpi) / 1e3:.0f} kPa"
+            mf_d = float(rolling_drag(cy, fz, dpi))
+            print(f"{fz:12.2f} N{at}: rolling resistance |M_y|/R_l = {mf_d:.4g} N, E12's drag {d:.4g} N "
+                  f"({100 * (mf_d / d - 1):+.2f} %)")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

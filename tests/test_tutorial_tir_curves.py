@@ -152,7 +152,7 @@ def test_all_pressures_round_trip(tmp_path):
 def read_back_errors(folder):
     """A characterization's tire.tir read back by the two example evaluators (written without jtire)
     against its own curves at NOMPRES: {"F_y": [% of peak per load over 0-8 deg], "F_x": [... over
-    0-10 % slip]} and the two printouts."""
+    0-10 % slip], "M_y": [|drag from M_y / R_l against E12's drag| in % per load]} and the two printouts."""
     folder = Path(folder)
     out, text = {}, []
     for what, script, pattern in (("F_y", SCRIPT, r"over 0-8 deg = ([0-9.]+) %"),
@@ -162,6 +162,8 @@ def read_back_errors(folder):
                            capture_output=True, text=True, check=False, timeout=120)
         assert r.returncode == 0, r.stderr
         out[what] = [float(m.group(1)) for m in re.finditer(pattern, r.stdout)]
+        if what == "F_x":
+            out["M_y"] = [abs(float(m.group(1))) for m in re.finditer(r"E12's drag \S+ N \(([-+0-9.]+) %\)", r.stdout)]
         text.append(r.stdout)
     return out, "\n".join(text)
 

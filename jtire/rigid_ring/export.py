@@ -7,6 +7,7 @@ from pathlib import Path
 from ..io import atomic_write_text
 from . import magic_formula as mf
 from . import mf_longitudinal as mfx
+from . import mf_rolling
 from . import report, tir, trends
 
 
@@ -46,5 +47,12 @@ def export(char, out_dir, tir_name: str = "rigid_ring.tir", longvl: float = 6.70
             lines.append(f"  {fz:9.0f} N {p / 1e3:6.0f} kPa: F_x {100 * e:.2f} %")
     else:
         lines.append("MF F_x fit: no E06 curves in the characterization (only PKX1, PKX2, PPX1 from k_k)")
+    rf = mf_rolling.rolling_fit(char, {k: (v, c) for rows in sections.values() for k, v, c in rows}, rated)
+    if rf is not None:
+        lines.append(f"MF rolling resistance (QSY1, QSY7, QSY8 from E12's drag): max drag error {100 * rf.max_error:.2f} %")
+        for fz, p, d, d_mf, e in rf.errors:
+            lines.append(f"  {fz:9.0f} N {p / 1e3:6.0f} kPa: E12 {d:.4g} N, |M_y|/R_l {d_mf:.4g} N ({100 * e:+.2f} %)")
+    else:
+        lines.append("MF rolling resistance: no E12 drag in the characterization (QSY1, QSY7 defaults)")
     lines += [f"note: {n}" for n in notes]
     return [Path(p) for p in written if p is not None], lines

@@ -6,7 +6,8 @@ assumption (damping ratios 0.03-0.05, sidewall stiffnesses giving FREQ_* of 20-4
 curves come from a known MF 6.1 coefficient set (`TRUE_MF`), so a fit must recover it. The
 trends are the physical ones (stiffnesses rise with pressure, the footprint lengthens with load...).
 The E06 force-slip curves come from `TRUE_MF_X` plus a free-rolling drag of 0.6 % of F_z (the fit
-must remove it); their slope at zero slip is near, not equal to, the row's k_k law.
+must remove it); their slope at zero slip is near, not equal to, the row's k_k law. E12's drag is 0.6 %
+of F_z at the rated condition and a power law in load and pressure around it.
 """
 
 import dataclasses
@@ -32,6 +33,8 @@ TRUE_MF_X = {"PCX1": 1.6, "PDX1": 0.9, "PDX2": -0.08, "PEX1": 0.3, "PEX2": 0.1, 
              "PKX2": -3.0, "PKX3": 0.2, "PPX1": -0.3, "PPX2": 0.2, "PPX3": -0.1, "PPX4": 0.05}
 E06_SLIPS = tuple(np.round(np.linspace(0.0, 0.2, 21), 12))
 FREE_ROLLING_DRAG = 0.006  # of F_z: F_x at zero slip is -0.006 F_z (the rolling resistance)
+# E12's drag: FREE_ROLLING_DRAG F_z at the rated condition, x (F_z/F_z,rated)^0.15 (p/p_rated)^-0.3 elsewhere
+RR_LOAD_EXPONENT, RR_PRESSURE_EXPONENT = 0.15, -0.3
 
 
 def _xi_c(xi, k, m):
@@ -67,7 +70,8 @@ def row(tire: TireInfo, load_kg: float, pressure_psi: float, mf=None, angles_deg
     q = {"contact_length_m": length, "contact_width_m": width, "k_sv_N_per_m": k_sv, "first_mode_Hz": f1,
          "k_dv_N_per_m": k_dv, "k_btheta_Nm_per_rad": k_bth, "k_k_N_per_slip": k_k, "k_cx_N_per_m": k_k / (length / 2),
          "k_by_N_per_m": k_by, "k_bgamma_Nm_per_rad": k_bg, "k_l_N_per_m": k_l, "k_f_N_per_rad": k_f,
-         "k_m_Nm_per_rad": k_m, "sigma_m": k_f / k_l, "deflection_m": fz / k_sv}
+         "k_m_Nm_per_rad": k_m, "sigma_m": k_f / k_l, "deflection_m": fz / k_sv,
+         "rolling_resistance_N": FREE_ROLLING_DRAG * fz * lr**RR_LOAD_EXPONENT * pr**RR_PRESSURE_EXPONENT}
     for stem, unit, xi, k, m in (("C_tot", "Ns_per_m", 0.05, k_sv, tire.m_tot_kg),
                                  ("C_btheta", "Nms_per_rad", 0.04, k_bth, tire.I_by_kgm2),
                                  ("C_by", "Ns_per_m", 0.04, k_by, tire.m_b_kg),

@@ -1,8 +1,7 @@
 """The characterization: what `jtire characterize` writes and every rigid-ring tool reads.
 
-A characterization is the tire's reference data plus one row per condition (load x pressure) holding
-the SI quantities the virtual experiments E01-E11 and E13 produce, and the E10 curves of that condition.
-Any quantity may be missing (an experiment not run, or failed): the row lacks it, or holds None.
+A characterization is the tire's reference data plus one row per condition (load x pressure) holding the SI
+quantities of E01-E13 and E10's and E06's curves. A quantity may be missing (not run, or failed): absent or None.
 
 `characterization.json` layout (SI; the writer adds "quantities" for the reader's eye, the reader ignores it):
 
@@ -81,6 +80,7 @@ QUANTITIES = (
     _q("C_bx_Ns_per_m", "C_bx", "N s/m", "E13", "longitudinal sidewall damping (rigid belt, fore-aft)", "in", True),
     _q("k_k_N_per_slip", "k_k", "N", "E06", "longitudinal slip stiffness", "in", display=("kN", 1e-3)),
     _q("k_cx_N_per_m", "k_cx", "N/m", "E06", "tread longitudinal stiffness k_k / a", "in", display=("kN/m", 1e-3)),
+    _q("rolling_resistance_N", "F_r", "N", "E12", "rolling resistance (free-rolling hub drag)", "in"),
     _q("k_by_N_per_m", "k_by", "N/m", "E07", "lateral sidewall stiffness", "out", display=("kN/m", 1e-3)),
     _q("C_by_Ns_per_m", "C_by", "N s/m", "E07", "lateral sidewall damping", "out", True),
     _q("k_bgamma_Nm_per_rad", "k_bgamma", "N m/rad", "E08", "camber-wise sidewall stiffness", "out",

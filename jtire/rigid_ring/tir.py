@@ -13,7 +13,8 @@ Load/pressure laws fitted here (MF 6.1/6.2 forms, TyreDyn stiffness_mf6x / conta
   (1 + PCFY3 dpi), C_x likewise with PCFX*;  a/R0 = Q_RA2 rho/R0 + Q_RA1 sqrt(rho/R0);
   b/W = Q_RB1 (rho/R0)^(1/3) (Q_RB2 = 0), rho = F_z / k_sv, a and b the half length and width;
   pure longitudinal slip (PCX1 ... PPX4): the MF fit to E06's force-slip curves
-  (`mf_longitudinal`); without curves only K_xk = F_z (PKX1 + PKX2 dfz)(1 + PPX1 dpi) from k_k.
+  (`mf_longitudinal`); without curves only K_xk = F_z (PKX1 + PKX2 dfz)(1 + PPX1 dpi) from k_k;
+  rolling resistance QSY1, QSY7, QSY8 from E12's drag (`mf_rolling`).
 """
 
 import math
@@ -25,6 +26,7 @@ from ..errors import ConfigError
 from ..io import atomic_write_text
 from . import magic_formula as mf
 from . import mf_longitudinal as mfx
+from . import mf_rolling as mfr
 from .params import derive
 
 SECTIONS = (
@@ -82,7 +84,7 @@ DEFAULTS = {
     "ELLIPS_NWIDTH": (10, D), "ELLIPS_NLENGTH": (10, D), "FZMIN": (0.0, D), "KPUMIN": (-1.0, D), "KPUMAX": (1.0, D),
     "CAMMIN": (-0.0873, "camber effects not identified (their coefficients are 0)"), "CAMMAX": (0.0873, "camber effects not identified"),
     "PCX1": (1.65, "default (longitudinal force curve not measured)"),
-    "PDX1": (1.0, "default (longitudinal friction not measured)"), "QSY1": (0.01, "default (rolling resistance not exported)"),
+    "PDX1": (1.0, "default (longitudinal friction not measured)"), "QSY1": (0.01, "default (no E12 drag: rolling resistance not exported)"),
     "QSY7": (1.0, "default: moment proportional to load"), "PDXP1": (0.4, "default (turn slip not identified)"),
     "PKYP1": (1.0, D), "PDYP1": (0.4, D), "PHYP1": (1.0, D), "PHYP2": (0.15, D), "PHYP4": (-4.0, D), "PECP1": (0.5, D),
     "QDTP1": (10.0, D), "QCRP1": (0.2, D), "QCRP2": (0.1, D), "QBRP1": (0.1, D), "QDRP1": (1.0, D),
@@ -189,6 +191,7 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
                 f"{what} vs pressure at {fz0:.0f} N ({len(pts)} pressures)")
 
     pressure_law("k_sv", "PFZ1", "k_sv")
+    mfr.put_keys(char, vals, put, notes, r0)
     load_law("k_l_static", "PCFY1", "PCFY2", "k_l")
     pressure_law("k_l_static", "PCFY3", "k_l")
     load_law("C_x", "PCFX1", "PCFX2", "C_x")

@@ -30,6 +30,7 @@ CHECKS = (
     ("contact_length_m", "footprint length rises with load", +1, "load"),
     ("k_f_N_per_rad", "k_f rises with load", +1, "load"),
     ("sigma_m", "sigma rises with load", +1, "load"),
+    ("rolling_resistance_N", "rolling resistance (E12) rises with load", +1, "load"),
 )
 
 
