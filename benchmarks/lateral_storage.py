@@ -14,7 +14,6 @@ Prints one markdown table and writes OUT/lateral_storage.json. Default mesh: abo
 
 import argparse
 import dataclasses
-import json
 import sys
 import time
 from pathlib import Path
@@ -24,33 +23,74 @@ PUSHES = (("lateral_stiffness", "k_l_N_per_m"), ("sidewall_translation", "k_by_N
           ("sidewall_camber", "k_bgamma_Nm_per_rad"))
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def parse(argv, description, out):
+    """The storage benchmarks' command line: a characterization folder, conditions, an output folder."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("char_dir", help="a finished characterization folder (jtire characterize --out DIR)")
     ap.add_argument("--condition", nargs=2, type=float, action="append", metavar=("KG", "PSI"),
                     help="a grid condition (default: the validation's three)")
-    ap.add_argument("--out", default="runs/lateral_storage")
-    a = ap.parse_args(argv)
-    from jtire import batch, cache
+    ap.add_argument("--out", default=out)
+    return ap.parse_args(argv)
+
+
+def setup(a):
+    """(plan, solver protocol, characterization, [(kg, psi, SI condition)]) for the parsed arguments."""
+    from jtire import cache
     from jtire import units as U
     from jtire.characterize import load_plan
-    from jtire.config import validate_table
-    from jtire.experiments import REGISTRY
     from jtire.experiments.phases import Protocol
     from jtire.resources import config_path
-    from jtire.rigid_ring.modes import lateral_modes
-    from jtire.rigid_ring.params import derive
     from jtire.rigid_ring.table import read_characterization
-    from jtire.tire import make_tire
-    from jtire.validate import DEFAULT_CONDITIONS, shell_metrics, storage_tire
+    from jtire.validate import DEFAULT_CONDITIONS
 
     cache.enable()
     plan = load_plan(config_path("characterize.toml"))
-    char = read_characterization(a.char_dir)
-    proto = Protocol.from_dict(plan.solver)
+    conds = [(kg, psi, {"load_N": kg * U.G0, "pressure_Pa": psi * U.PSI})
+             for kg, psi in a.condition or DEFAULT_CONDITIONS]
+    return plan, Protocol.from_dict(plan.solver), read_characterization(a.char_dir), conds
+
+
+def storage_ratio(plan, proto, name, key, cond, f_hz, where):
+    """Experiment `name`'s static push on the storage moduli at f_hz over its push on the long-term
+    moduli: quantity `key`'s ratio (its shortest decay when it has one: only the push is read)."""
+    from jtire import batch
+    from jtire.config import validate_table
+    from jtire.experiments import REGISTRY
+    from jtire.tire import make_tire
+    from jtire.validate import storage_tire
+
+    schema = REGISTRY[name].schema
+    table = dict(plan.tables.get(name) or validate_table({}, schema, name))
+    if "decay_s" in schema:
+        fld = schema["decay_s"]
+        table["decay_s"] = fld.lo * fld.factor
+    k = []
+    for spec in (plan.tire, storage_tire(plan.tire, f_hz)):
+        r = batch.run(REGISTRY[name].from_table(table, proto, spec), make_tire(spec), [cond])[0]
+        if isinstance(r, batch.CaseFailure):
+            raise SystemExit(f"{name} at {where}: {r.error}")
+        k.append(r.quantities[key])
+    return k[1] / k[0]
+
+
+def save(a, name, rows):
+    """rows with the characterization they came from, as JSON in the output folder (atomically)."""
+    from jtire.io import atomic_write_json
+
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    return atomic_write_json(out / name, {"char_dir": str(a.char_dir), "rows": rows})
+
+
+def main(argv=None):
+    a = parse(argv, __doc__.splitlines()[0], "runs/lateral_storage")
+    from jtire.rigid_ring.modes import lateral_modes
+    from jtire.rigid_ring.params import derive
+    from jtire.validate import shell_metrics
+
+    plan, proto, char, conds = setup(a)
     rows = []
-    for kg, psi in a.condition or DEFAULT_CONDITIONS:
-        c = {"load_N": kg * U.G0, "pressure_Pa": psi * U.PSI}
+    for kg, psi, c in conds:
         f = shell_metrics(a.char_dir, c["load_N"], c["pressure_Pa"])[0].get("lateral.f_Hz")
         row = char.row(c["load_N"], c["pressure_Pa"])
         if f is None or row is None:
@@ -58,22 +98,15 @@ def main(argv=None):
             continue
         t0, ratio = time.perf_counter(), {}
         for name, key in PUSHES:
-            table = plan.tables.get(name) or validate_table({}, REGISTRY[name].schema, name)
-            table = dict(table) | {"decay_s": REGISTRY[name].schema["decay_s"].lo * REGISTRY[name].schema["decay_s"].factor}
             cond = c if name == "lateral_stiffness" else {"pressure_Pa": c["pressure_Pa"]}
-            k = []
-            for spec in (plan.tire, storage_tire(plan.tire, f)):
-                r = batch.run(REGISTRY[name].from_table(table, proto, spec), make_tire(spec), [cond])[0]
-                if isinstance(r, batch.CaseFailure):
-                    raise SystemExit(f"{name} at {kg:g} kg, {psi:g} psi: {r.error}")
-                k.append(r.quantities[key])
-            ratio[key] = k[1] / k[0]
-        d = derive(row, char.tire)  # the static pushes' springs
+            ratio[key] = storage_ratio(plan, proto, name, key, cond, f, f"{kg:g} kg, {psi:g} psi")
+        d = derive(row, char.tire, lateral_springs="static")  # the static pushes' springs
         r_l = ratio["k_l_N_per_m"]
         f_static = lateral_modes(d, "ring")[0][0]
         f_scaled = lateral_modes(dataclasses.replace(d, k_l=d.k_l * r_l, k_by=d.k_by * r_l,
                                                      k_bgamma=d.k_bgamma * r_l, k_cy=d.k_cy * r_l), "ring")[0][0]
-        d2 = derive(dataclasses.replace(row, q=row.q | {k: row.q[k] * ratio[k] for _, k in PUSHES}), char.tire)
+        d2 = derive(dataclasses.replace(row, q=row.q | {k: row.q[k] * ratio[k] for _, k in PUSHES}), char.tire,
+                     lateral_springs="static")
         f_own = lateral_modes(d2, "ring")[0][0]
         rows.append({"load_kg": kg, "pressure_psi": psi, "f_shell_Hz": f, "ratios": ratio,
                      "f_ring_static_Hz": f_static, "f_ring_scaled_Hz": f_scaled, "f_ring_own_Hz": f_own,
@@ -90,9 +123,7 @@ def main(argv=None):
         print(f"| {r['load_kg']:g} kg, {r['pressure_psi']:g} psi | {r['f_shell_Hz']:.2f} Hz | {ks} | "
               f"{fp(r['f_ring_static_Hz'], r['f_shell_Hz'])} | {fp(r['f_ring_scaled_Hz'], r['f_shell_Hz'])} | "
               f"{fp(r['f_ring_own_Hz'], r['f_shell_Hz'])} (x {r['k_cy_ratio']:.3f}) |")
-    out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "lateral_storage.json").write_text(json.dumps({"char_dir": str(a.char_dir), "rows": rows}, indent=1))
+    print("wrote", save(a, "lateral_storage.json", rows))
 
 
 if __name__ == "__main__":
