@@ -8,8 +8,9 @@ ring's own drum-cleat spectrum reads, followed as the springs change) on the sta
     python benchmarks/inplane_storage.py runs/characterize            # its validation conditions
     python benchmarks/inplane_storage.py runs/characterize --condition 4625 120
 
-Prints one markdown table and every ringing fore-aft mode, and writes OUT/inplane_storage.json. Default mesh:
-about 30 s per condition on 2 cores after compiling (six static pushes).
+Prints one markdown table and every ringing fore-aft mode (also with the tread's k_k x 0.5 and x 2), and
+writes OUT/inplane_storage.json. Default mesh: about 20 s per condition on 2 cores after compiling (six
+static pushes).
 """
 
 import dataclasses
@@ -20,6 +21,7 @@ import time
 from lateral_storage import parse, save, setup, storage_ratio
 
 RINGING_ZETA = 0.5  # as the diagnosis: a mode damped more than this puts no peak in a spectrum
+CONTACT_SCALES = (0.5, 2.0)  # the tread's longitudinal stiffness scaled: how the ring's modes follow the contact
 
 
 def fore_aft(d, speed, target):
@@ -62,11 +64,15 @@ def main(argv=None):
         dx = dataclasses.replace(d, k_bx=d.k_bx * ratio["k_bx_N_per_m"],
                                  k_btheta=d.k_btheta * ratio["k_btheta_Nm_per_rad"])
         m1, _ = fore_aft(dx, speed, m0[0])
+        # the contact's share: the ring's ringing modes with its tread's k_k (and k_cx = k_k / a) scaled
+        contact = {m: fore_aft(dataclasses.replace(d, k_k=d.k_k * m, k_cx=d.k_cx * m), speed, m0[0])[1]
+                   for m in CONTACT_SCALES}
         rows.append({"load_kg": kg, "pressure_psi": psi, "ratios": ratio,
                      "shell_bounce_Hz": f_b, "ring_bounce_Hz": vertical_modes(d)[0][0],
                      "ring_bounce_storage_Hz": vertical_modes(dv)[0][0],
                      "shell_fore_aft_Hz": f_x, "ring_fore_aft_metric_Hz": f_metric, "ring_fore_aft_Hz": m0[0],
                      "ring_fore_aft_storage_Hz": m1[0], "ring_fore_aft_ringing": ringing,
+                     "ring_fore_aft_ringing_k_k_scaled": contact,
                      "wall_s": time.perf_counter() - t0})
         print(f"{where}: {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
@@ -86,6 +92,8 @@ def main(argv=None):
         ms = ", ".join(f"{f:.2f} Hz (zeta {z:.2f}, x_b {s:.2f})" for f, z, s in r["ring_fore_aft_ringing"])
         print(f"{r['load_kg']:g} kg, {r['pressure_psi']:g} psi: ring's drum spectrum reads "
               f"{r['ring_fore_aft_metric_Hz']:.2f} Hz; its ringing fore-aft modes {ms}")
+        for m, modes in r["ring_fore_aft_ringing_k_k_scaled"].items():
+            print(f"  k_k x {m:g}: " + ", ".join(f"{f:.2f} Hz (x_b {s:.2f})" for f, _, s in modes))
     print("wrote", save(a, "inplane_storage.json", rows))
 
 
