@@ -20,12 +20,12 @@ import time
 
 from lateral_storage import parse, save, setup, storage_ratio
 
-RINGING_ZETA = 0.5  # as the diagnosis: a mode damped more than this puts no peak in a spectrum
 CONTACT_SCALES = (0.5, 2.0)  # the tread's longitudinal stiffness scaled: how the ring's modes follow the contact
 
 
 def fore_aft(d, speed, target):
     """The ringing fore-aft mode of d nearest target (Hz): (f, zeta, x_b share)."""
+    from jtire.rigid_ring.diagnosis_drum import RINGING_ZETA  # the diagnosis's: no peak in a spectrum above it
     from jtire.rigid_ring.modes import fore_aft_modes
 
     ms = [m for m in fore_aft_modes(d, speed) if m[1] < RINGING_ZETA]
