@@ -17,6 +17,7 @@ import sys
 import time
 
 import numpy as np
+from inplane_storage import fore_aft
 from lateral_storage import parse, save, setup
 
 PEAK_FLOOR = 0.1  # spectral peaks listed down to this fraction of the band's largest
@@ -39,14 +40,13 @@ def read(t, y, band, t_start):
     from jtire import spectra
 
     first = spectra.first_mode(t, y, f_band=band, t_start=t_start)
-    fixed = spectra.first_mode(t, y, f_band=band, t_start=t_start, n_modes=N_FIT)
     pk, raw = peaks(t, y, band, t_start)
     keep = t >= t_start
     mf = spectra._greedy_modal_fit(t[keep], y[keep], first.f_peak_Hz, N_FIT, "hann")
     order = np.argsort(mf.omega_n)
     modes = [(float(mf.omega_n[j] / (2 * np.pi)), float(mf.xi[j]), float(mf.amplitude[j])) for j in order]
     return {"metric_f_n_Hz": first.fn_fit_Hz, "metric_zeta": first.xi_fit, "metric_modes": first.n_modes_fit,
-            "fixed_fit_f_n_Hz": fixed.fn_fit_Hz, "peaks_Hz_rel": pk, "raw_resolution_Hz": raw,
+            "peaks_Hz_rel": pk, "raw_resolution_Hz": raw,
             "record_s": float(t[-1] - t_start), "fit_modes_Hz_zeta_amp_N": modes, "fit_rms_relative": mf.rms_relative}
 
 
@@ -54,8 +54,6 @@ def main(argv=None):
     a = parse(argv, __doc__.splitlines()[0], "runs/drum_fore_aft_peaks")
     from jtire import results
     from jtire.rigid_ring import scenarios
-    from jtire.rigid_ring.diagnosis_drum import RINGING_ZETA
-    from jtire.rigid_ring.modes import fore_aft_modes
     from jtire.rigid_ring.params import derive
     from jtire.validate import _case_dir, _signals
 
@@ -82,9 +80,9 @@ def main(argv=None):
         ts = r.signals["time_s"]
         t_free = float(r.info["t_free_s"])  # the cleat has left the patch
         ring = read(ts, r.signals["spindle_F_x_N"], band, t_free)
-        linear = [(float(f), float(z), float(xb)) for f, z, xb in fore_aft_modes(d, speed)[:8] if z < RINGING_ZETA]
+        linear = fore_aft(d, speed, ring["metric_f_n_Hz"])[1]
         rows.append({"load_kg": kg, "pressure_psi": psi, "shell": shell, "ring": ring, "ring_linear_modes": linear,
-                     "ring_metric_check_Hz": r.quantities["F_x_f_n_fit_Hz"], "wall_s": time.perf_counter() - t0})
+                     "wall_s": time.perf_counter() - t0})
         print(f"{where}: {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
 
     def fmt(rd):
@@ -97,7 +95,7 @@ def main(argv=None):
     for r in rows:
         print(f"\n{r['load_kg']:g} kg, {r['pressure_psi']:g} psi")
         print(f"  shell: {fmt(r['shell'])}")
-        print(f"  ring:  {fmt(r['ring'])}  [validation's reading {r['ring_metric_check_Hz']:.2f} Hz]")
+        print(f"  ring:  {fmt(r['ring'])}")
         print("  ring linear modes (f_n / zeta / x_b share): "
               + ", ".join(f"{f:.1f} / {z:.3f} / {x:.2f}" for f, z, x in r["ring_linear_modes"]))
     save(a, "drum_fore_aft_peaks", rows)

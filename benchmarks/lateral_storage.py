@@ -23,13 +23,16 @@ PUSHES = (("lateral_stiffness", "k_l_N_per_m"), ("sidewall_translation", "k_by_N
           ("sidewall_camber", "k_bgamma_Nm_per_rad"))
 
 
-def parse(argv, description, out):
-    """The storage benchmarks' command line: a characterization folder, conditions, an output folder."""
+def parse(argv, description, out, add=None):
+    """The storage benchmarks' command line: a characterization folder, conditions, an output folder;
+    add(parser) adds a script's own options."""
     ap = argparse.ArgumentParser(description=description)
     ap.add_argument("char_dir", help="a finished characterization folder (jtire characterize --out DIR)")
     ap.add_argument("--condition", nargs=2, type=float, action="append", metavar=("KG", "PSI"),
                     help="a grid condition (default: the validation's three)")
     ap.add_argument("--out", default=out)
+    if add is not None:
+        add(ap)
     return ap.parse_args(argv)
 
 
