@@ -48,8 +48,9 @@ def _drop_bounce_f_tangent(cx, c):
         return NONE, txt + "; the shell's drop has no in-contact part to compare it with"
     txt += f"; after its last lift-off the shell rings at f_n = {_n(f_in, 'Hz')} ({_p(f0 / f_in - 1)})"
     if _within(f0, f_in, c.tolerance):
+        law = "E02's curve past the load" if d.k_vr3 is not None else "the quadratic fitted at the load"
         txt += (". The small motions agree: the miss is in the part of the record with lift-offs, where the ring's "
-                "contact law is the quadratic fitted at the load")
+                f"contact law is {law}")
     return NONE, txt
 
 
@@ -137,8 +138,9 @@ def _drop_peak(cx, c):
            f"stored on {src}{extra}, gives a peak of {_n(p_curve, 'N')} ({_p(p_curve / c.shell - 1)} against the "
            f"shell's {_n(c.shell, 'N')})")
     if cx.d.uses_tangent:
-        txt += (f"; the ring's contact law is a quadratic with E02's secant and tangent at the load, not the whole "
-                f"curve (ring {_n(c.ring, 'N')})")
+        law = ("follows E02's secant and tangent at the load and its largest load, then its end slope" if
+               cx.d.k_vr3 is not None else "is a quadratic with E02's secant and tangent at the load, not the whole curve")
+        txt += f"; the ring's contact law {law} (ring {_n(c.ring, 'N')})"
         state = _verdict(p_curve, c.shell, c.ring, c.tolerance)
         state = PARTIAL if state == FULL else state  # the ring's own law is not the curve: not shown to be the cause
     else:

@@ -33,11 +33,14 @@ def vertical_split(k_dyn, k_dv):
     return valid_a, k_bz_a, k_vr_a, k_bz_b, k_vr_b, None, None, None
 
 
-def residual_spring(fz, k_sv, k_bz, k_vr):
-    """The residual (belt-road) spring's law F = k_vr1 rho + k_vr2 rho^2 such that, with the sidewall's
-    k_bz in series, its secant at the load gives the static rest F_z/k_sv and its tangent is k_vr.
-    Returns (fields, None) or (None, why) when no such law stiffens monotonically from rho = 0
-    (k_vr2 >= 0, k_vr1 > 0)."""
+def residual_spring(fz, k_sv, k_bz, k_vr, top=None):
+    """The residual (belt-road) spring's law F = k_vr1 rho + k_vr2 rho^2 up to the load, such that, with
+    the sidewall's k_bz in series, its secant at the load gives the static rest F_z/k_sv and its tangent
+    is k_vr. top = (F_max, deflection at F_max): E02's largest load; above the load the law then goes on
+    with a cubic term k_vr3 s^3 (s = rho - rho_r: value, tangent and curvature continuous at the rest)
+    through E02's largest load, and past it along its end slope, instead of stiffening quadratically
+    (`residual_force`). Returns (fields, None) or (None, why) when no law stiffens monotonically from
+    rho = 0 (k_vr2 >= 0, k_vr1 > 0); an upper piece whose end slope is not positive is left out."""
     if not k_bz > k_sv:
         return None, f"k_bz = {k_bz:.4g} N/m <= k_sv: no residual secant"
     ks = 1.0 / (1.0 / k_sv - 1.0 / k_bz)
@@ -45,7 +48,45 @@ def residual_spring(fz, k_sv, k_bz, k_vr):
     k1, k2 = 2.0 * ks - k_vr, (k_vr - ks) / rho
     if k2 < 0 or k1 <= 0:
         return None, "its residual spring softens" if k2 < 0 else "its residual spring stiffens past a quadratic"
-    return {"k_vr_secant": ks, "k_vr1": k1, "k_vr2": k2, "rho_r": rho}, None
+    out = {"k_vr_secant": ks, "k_vr1": k1, "k_vr2": k2, "rho_r": rho, "rho_max": None, "k_vr3": None}
+    if top is not None and finite(*top) and top[0] > 1.05 * fz:
+        span = top[1] - top[0] / k_bz - rho
+        if span > 0:
+            k3 = (top[0] - fz - k_vr * span - k2 * span**2) / span**3
+            # F' = k_vr + 2 k2 s + 3 k3 s^2 is positive on [0, span] when it is at both ends (k2 >= 0)
+            if k_vr + 2.0 * k2 * span + 3.0 * k3 * span**2 > 0:
+                out |= {"rho_max": rho + span, "k_vr3": k3}
+    return out, None
+
+
+def residual_force(rho, k1, k2, rho_r, rho_max, k3, xp=np):
+    """The residual spring's force (N) at deflection rho (m, >= 0) on the law of `residual_spring`:
+    k1 rho + k2 rho^2 + k3 s^3 with s = clip(rho - rho_r, 0, rho_max - rho_r), and past rho_max the
+    end slope's line (k3 = 0 and rho_max beyond any deflection: the quadratic throughout; xp: numpy or
+    jax.numpy)."""
+    top = xp.minimum(rho, rho_max)
+    s = xp.clip(rho - rho_r, 0.0, rho_max - rho_r)
+    span = rho_max - rho_r
+    k_end = k1 + 2.0 * k2 * rho_max + 3.0 * k3 * span**2
+    return k1 * top + k2 * top**2 + k3 * s**3 + k_end * xp.maximum(rho - rho_max, 0.0)
+
+
+def residual_deflection(force, k1, k2, rho_r=math.inf, rho_max=math.inf, k3=0.0):
+    """The inverse of `residual_force`: rho (m) under a contact force (N)."""
+    def quad(f):  # rho >= 0 with k1 rho + k2 rho^2 = f, the stable root
+        return f / k1 if k2 == 0.0 else 2.0 * f / (k1 + math.sqrt(k1 * k1 + 4.0 * k2 * f))
+
+    if not math.isfinite(rho_r) or force <= k1 * rho_r + k2 * rho_r**2:
+        return quad(force)
+    f_max = float(residual_force(rho_max, k1, k2, rho_r, rho_max, k3))
+    if force > f_max:
+        span = rho_max - rho_r
+        return rho_max + (force - f_max) / (k1 + 2.0 * k2 * rho_max + 3.0 * k3 * span**2)
+    lo, hi = rho_r, rho_max  # monotone between: bisection to round-off
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if residual_force(mid, k1, k2, rho_r, rho_max, k3) < force else (lo, mid)
+    return 0.5 * (lo + hi)
 
 
 def damping_split(tire, k_bz, k_vr, zeta_v, zeta_bounce, tau, n_grid=201):

@@ -26,9 +26,9 @@ either direction.
 
 In-plane (Zegelaar & Pacejka; §4): belt and rim joined by the sidewall springs/dampers
 (k_bx, C_bx; k_bz, C_bz; k_btheta, C_btheta); the belt stands on the residual spring
-F_z = max(0, k_vr rho + k_vr2 rho^2 + C_vr rho_dot) where rho = R0 - (z_b - z_road) > 0, else 0 (no adhesion:
-the max), with the damper faded in over the first RHO_RAMP = 0.5 mm of deflection (continuous force:
-see `forces`).
+F_z = max(0, k_vr rho + k_vr2 rho^2 + C_vr rho_dot) (past the load the spring of `identify.residual_force`)
+where rho = R0 - (z_b - z_road) > 0, else 0 (no adhesion: the max), with the damper faded in over the
+first RHO_RAMP = 0.5 mm of deflection (continuous force: see `forces`).
 Longitudinal slip (§5): u = a kappa', a du/dt + |V| u = -a V_sx, V_sx = V + x_b' - r_e theta_b'
 (minus the road's own motion), F_x = k_cx u + C_vlow du/dt with k_cx = k_k / a, so the
 contact relaxation length is a (study eq 5-17) and at V = 0 the patch is a tread spring; C_vlow
@@ -61,6 +61,7 @@ import jax
 import jax.numpy as jnp
 
 from .. import enveloping
+from .identify import residual_force
 from .params import RigidRingParams
 
 N_Q = 10
@@ -213,7 +214,8 @@ class RigidRing(eqx.Module):
         # first RHO_RAMP of deflection so the force stays continuous: a jump C_vr x impact speed at
         # the touch would make the adjoint miss the touch time's sensitivity (docs/design-notes.md)
         ramp = jnp.clip(rho / RHO_RAMP, 0.0, 1.0)
-        fz = contact * jnp.maximum(0.0, (p.k_vr + p.k_vr2 * rho) * rho + ramp * p.C_vr * (zr_dot - vzb))
+        f_spring = residual_force(jnp.maximum(rho, 0.0), p.k_vr, p.k_vr2, p.rho_r, p.rho_max, p.k_vr3, jnp)
+        fz = contact * jnp.maximum(0.0, f_spring + ramp * p.C_vr * (zr_dot - vzb))
         fsx = -p.k_bx * (xb - xa) - p.C_bx * (vxb - vxa)
         fsz = -p.k_bz * (zb - za) - p.C_bz * (vzb - vza)
         msth = -p.k_btheta * (thb - tha) - p.C_btheta * (vthb - vtha)

@@ -34,18 +34,12 @@ import jax.numpy as jnp
 
 from ..errors import ConfigError
 from .identify import branch_storage, damping_split, maxwell_branch, mz_curve, residual_spring, tread_damper
-from .identify import vertical_split
+from .identify import residual_deflection, vertical_split
 from .identify import finite as _ok
 from .table import ConditionRow, TireInfo
 
 SIGMA_C_RANGE = (0.25, 4.0)  # plausible sigma_c / a
 LATERAL_SPRINGS = ("maxwell", "static", "storage")  # the ring's lateral springs (`derive`; the first: default)
-
-
-def _f(x):
-    return None if x is None else float(x)
-
-
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,6 +104,8 @@ class Derived:
     k_vr1: float | None = None  # contact law F = k_vr1 rho + k_vr2 rho^2 (N/m, N/m^2): its secant at the
     k_vr2: float | None = None  # load is k_vr_secant (static rest at F_z/k_sv), its tangent k_vr
     rho_r: float | None = None  # residual spring's deflection at the load (m)
+    rho_max: float | None = None  # above the load + k_vr3 (rho - rho_r)^3 up to rho_max (E02's largest load),
+    k_vr3: float | None = None  # then its end slope (`identify.residual_spring`); None: the quadratic throughout
     stiffness_source: str | None = None  # which stiffness the dynamic springs use, and why
     damping_source: str | None = None  # how C_bz, C_vr were identified (or the fallback, and why)
     mz_curve: tuple | None = None  # (alpha SAE rad (n,), M_z SAE N m (n,)): E10's steady curve, odd, ascending
@@ -138,12 +134,9 @@ class Derived:
         return 1.0 / (1.0 / self.k_cy + (1.0 / self.k_by + self.r_b**2 / self.k_bgamma) / s)
 
     def residual_deflection(self, force: float) -> float:
-        """The residual spring's deflection (m) under a contact force (N): the root of
-        k_vr1 rho + k_vr2 rho^2 = force."""
-        k1, k2 = self.k_vr1, self.k_vr2 or 0.0
-        if k2 == 0.0:
-            return force / k1
-        return 2.0 * force / (k1 + math.sqrt(k1 * k1 + 4.0 * k2 * force))  # the stable form of the root
+        """The residual spring's deflection (m) under a contact force (N) (`identify.residual_deflection`)."""
+        top = () if self.k_vr3 is None else (self.rho_r, self.rho_max, self.k_vr3)
+        return residual_deflection(force, self.k_vr1, self.k_vr2 or 0.0, *top)
 
     @property
     def uses_tangent(self) -> bool:
@@ -246,9 +239,10 @@ def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "maxwell") 
         vert = vertical_split(k_t, k_dv)
         why = "neither vertical split is valid with the tangent"
         if vert[6] is not None:
-            res, why = residual_spring(fz, k_sv, vert[6], vert[7])
+            res, why = residual_spring(fz, k_sv, vert[6], vert[7], (g("max_load_N"), g("settled_deflection_at_max_load_m")))
     if res is not None:
-        res["stiffness_source"] = "tangent at the load (E02), static rest at the secant k_sv"
+        res["stiffness_source"] = "tangent at the load (E02), static rest at the secant k_sv" + (
+            "" if res["k_vr3"] is None else ", above the load through E02's largest load")
     else:
         vert = vertical_split(k_sv, k_dv)
         k_lin = vert[7]
@@ -372,6 +366,9 @@ class RigidRingParams(eqx.Module):
     k_m: jnp.ndarray
     damp_vlow: jnp.ndarray
     k_vr2: jnp.ndarray
+    rho_r: jnp.ndarray  # the law above the load (`identify.residual_force`; rho_r = rho_max = 1 km: none)
+    rho_max: jnp.ndarray
+    k_vr3: jnp.ndarray
     k_by_branch: jnp.ndarray  # the sidewall's lateral Maxwell branches: stiffness beta k_by, beta k_bgamma,
     k_bgamma_branch: jnp.ndarray  # relaxation time tau_branch (Derived.lateral_branch; 0 stiffness: none)
     tau_branch: jnp.ndarray
@@ -384,6 +381,8 @@ class RigidRingParams(eqx.Module):
         if not t.m_tot_kg > t.m_b_kg > 0:
             raise ConfigError(f"tire m_tot_kg = {t.m_tot_kg}, m_b_kg = {t.m_b_kg}: need m_tot > m_b > 0")
         beta, tau = d.lateral_branch or (0.0, 1.0)  # no branch: zero stiffness (its state then idles)
+        up = {k: _leaf(v) for k, v in zip(("rho_r", "rho_max", "k_vr3"), (1e3, 1e3, 0.0) if d.k_vr3 is None else
+                                          (d.rho_r, d.rho_max, d.k_vr3))}
         return cls(m_b=_leaf(t.m_b_kg), m_a=_leaf(t.m_tot_kg - t.m_b_kg), m_tot=_leaf(t.m_tot_kg),
                    I_by=_leaf(t.I_by_kgm2), I_bx=_leaf(t.I_bx_kgm2), I_ay=_leaf(t.I_ay_kgm2), I_ax=_leaf(t.I_ax_kgm2),
                    R0=_leaf(t.unloaded_radius_m), a=_leaf(d.a), r_l=_leaf(d.r_l), r_e=_leaf(d.r_e),
@@ -392,7 +391,7 @@ class RigidRingParams(eqx.Module):
                    k_k=_leaf(d.k_k), k_by=_leaf(d.k_by), C_by=_leaf(d.C_by), k_bgamma=_leaf(d.k_bgamma),
                    C_bgamma=_leaf(d.C_bgamma), k_cy=_leaf(d.k_cy), C_cy=_leaf(d.C_cy), k_l=_leaf(d.k_l),
                    C_l=_leaf(d.C_l), k_f=_leaf(d.k_f), k_m=_leaf(d.k_m), damp_vlow=_leaf(damp_vlow),
-                   k_vr2=_leaf(d.k_vr2 or 0.0), k_by_branch=_leaf(beta * (d.k_by or 0.0)),
+                   k_vr2=_leaf(d.k_vr2 or 0.0), **up, k_by_branch=_leaf(beta * (d.k_by or 0.0)),
                    k_bgamma_branch=_leaf(beta * (d.k_bgamma or 0.0)), tau_branch=_leaf(tau), **_mz_table(d))
 
     @classmethod

@@ -21,6 +21,8 @@ DERIVED = (
     ("k_bz_N_per_m", "k_bz", "N/m", "kN/m", 1e-3, "in", "k_bz"),
     ("k_vr_N_per_m", "k_vr", "N/m", "kN/m", 1e-3, "in", "k_vr"),
     ("k_vr2_N_per_m2", "k_vr2", "N/m^2", "MN/m^2", 1e-6, "in", "k_vr2"),
+    ("k_vr3_N_per_m3", "k_vr3", "N/m^3", "GN/m^3", 1e-9, "in", "k_vr3"),
+    ("rho_max_m", "rho_max", "m", "mm", 1e3, "in", "rho_max"),
     ("C_bz_Ns_per_m", "C_bz", "N s/m", "N s/m", 1.0, "in", "C_bz"),
     ("C_vr_Ns_per_m", "C_vr", "N s/m", "N s/m", 1.0, "in", "C_vr"),
     ("k_bz_B_N_per_m", "k_bz (B)", "N/m", "kN/m", 1e-3, "in", "k_bz_B"),
@@ -164,8 +166,10 @@ def markdown(char: Characterization, plane: str) -> str:
     title = "In-plane rigid-ring parameters" if plane == "in" else "Out-of-plane rigid-ring parameters"
     note = ("Vertical split of the tangent k_vt (the secant k_sv without one): variant A (k_dv = k_bz + k_vr, needs "
             "k_dv >= 4 k_vt) when valid, else B (k_bz = k_dv); the residual spring k_vr rho + k_vr2 rho^2 rests at "
-            "F_z/k_sv. C_bz + C_vr from E03's belt-mode zeta, divided so the linear bounce has E04's in-contact "
-            "zeta; else (and in the B columns) tau = C_tot / k_sv for both." if plane == "in" else
+            "F_z/k_sv; above the load it goes on with k_vr3 (rho - rho_r)^3 through E02's largest load (its "
+            "residual deflection rho_max), past it on its end slope. C_bz + C_vr from E03's belt-mode zeta, divided "
+            "so the linear bounce has E04's in-contact zeta; else (and in the B columns) tau = C_tot / k_sv for both."
+            if plane == "in" else
             "k_cy from 1/k_l - 1/k_by - r_b^2/k_bgamma, or the fallback sigma_c = a when ill-conditioned. k_l' / k_l: "
             "E09's push on the rubber's storage moduli at its release frequency over its static push; the ring's "
             "springs are the static pushes, each sidewall spring k with a Maxwell branch (stiffness beta k, the "

@@ -101,7 +101,7 @@ EXTRA_KEYS = ("deflection_m", "first_mode_fit_fn_Hz", "first_mode_xi", "k_dv_fit
               # E03's tandem cam (jtire.enveloping), fitted to its quasi-static crossing
               "ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order", "enveloping_fit_rms_height_m",
               "enveloping_max_height_m", "f_l_storage_Hz",  # f_l_storage: where k_l_storage's moduli are taken
-              "xi_l_fit")  # E09's fitted release zeta: the ring's lateral tread damper (params.derive)
+              "xi_l_fit", "max_load_N", "settled_deflection_at_max_load_m")  # E09's release zeta, E02's top (derive)
 CURVE_KEYS = ("slip_angle_deg", "lateral_force_N", "M_z_SAE_Nm", "F_z_N", "F_y_SAE_N", "F_x_N")
 CURVE_REQUIRED = ("slip_angle_deg", "lateral_force_N")
 SLIP_CURVE_KEYS = ("slip", "force_x_N", "force_z_N")
