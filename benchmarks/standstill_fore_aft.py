@@ -24,27 +24,23 @@ import numpy as np
 from inplane_storage import fore_aft
 from lateral_storage import parse, save, setup
 
-RIM_XZ = np.array([1.0, 0, 1, 0, 0, 0])  # rim x and z free; its spin (index 4) held at zero
-
 
 def push(model, params, pressure, load, forces, where):
-    """E01's static path to `load`, then the rim forces `forces` (N, +x) with rim x and z free:
+    """E14's static path (`experiments.standstill`) to `load`, then the rim forces `forces` (N, +x):
     [(F, x from the loaded state, the patch's F_x)] per level (long-term moduli of `params`)."""
     import jax.numpy as jnp
 
     from jtire import equilibrium as EQ
-    from jtire.equilibrium.sequences import Levels
+    from jtire.experiments.standstill import _fore_aft_path_jit
     from jtire.experiments.static_path import STATIC_LOADS
 
     loads = load * jnp.arange(1, STATIC_LOADS + 1) / STATIC_LOADS
-    n = len(forces)
-    f = jnp.zeros((n, 6)).at[:, 0].set(jnp.asarray(forces, jnp.float64)).at[:, 2].set(-load)
-    path = EQ.static_path(model, params, pressure, EQ.vertical_levels(pressure, loads),
-                          Levels.make(pressure, rim_force=f, rim_free=RIM_XZ, friction_on=1.0, n=n))
-    EQ.check_static(path.infos, lambda k: f"{where}: static level {k}")
-    q, contact = np.asarray(path.q), np.asarray(path.contact)
-    x0 = q[-n - 1, 0]
-    return [(float(fx), float(q[-n + i, 0] - x0), float(contact[-n + i, 0])) for i, fx in enumerate(forces)]
+    st = _fore_aft_path_jit(model, params, pressure, loads, jnp.asarray(forces, jnp.float64))
+    EQ.check_static(st["infos"], lambda k: f"{where}: static level {k}")
+    EQ.check_static(st["fore_aft_infos"], lambda k: f"{where}: fore-aft level {k}")
+    q, contact = np.asarray(st["fore_aft_q"]), np.asarray(st["fore_aft_contact"])
+    x0 = float(np.asarray(st["q"])[-1, 0])
+    return [(float(fx), float(q[i, 0] - x0), float(contact[i, 0])) for i, fx in enumerate(forces)]
 
 
 def main(argv=None):

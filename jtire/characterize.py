@@ -27,7 +27,7 @@ from .schema import Field
 
 DEFAULT_EXPERIMENTS = ("footprint", "vertical_stiffness", "drum_cleat", "drop_test", "inplane_rotation", "traction",
                        "sidewall_translation", "sidewall_camber", "lateral_stiffness", "cornering", "rolling_resistance",
-                       "sidewall_longitudinal")
+                       "sidewall_longitudinal", "longitudinal_stiffness")
 GRID_SCHEMA = {**results.GRID_SCHEMA, **results.RATED_SCHEMA}
 TOP_KEYS = {"description", "tire_file", "experiments", "grid", "solver", "validation"}
 # the rigid ring's validation against the shell (`jtire.validate`): the shell's slip step resolves the force's

@@ -210,8 +210,9 @@ def characterize_text(size: S.Size, rated: Rated) -> str:
     from .experiments import REGISTRY
 
     ratio = rated.load_N / (4625.0 * U.G0)
-    text += "\n# rigid-belt test forces: each test's default (for the study's 45.4 kN) scaled to the rated load\n"
-    for name in RIGID_BELT_TESTS:
+    text += ("\n# rigid-belt and standstill test forces: each test's default (for the study's 45.4 kN) scaled to the "
+             "rated load\n")
+    for name in (*RIGID_BELT_TESTS, "longitudinal_stiffness"):
         default_kN = REGISTRY[name].schema["force_kN"].default
         text += f"\n[{name}]\nforce_kN = {round(default_kN * ratio, 3)}\n"
     head = (f"# The study's virtual test programme on the {size.text}, written by `jtire new-tire`: the shipped\n"

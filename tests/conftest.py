@@ -306,6 +306,12 @@ P_LOW = 80 * U.PSI
 
 
 @pytest.fixture(scope="session")
+def e14(runs):
+    """E14 at the rated condition, pushed forward and backward."""
+    return {d: runs("longitudinal_stiffness", [RATED], direction=d) for d in ("forward", "backward")}
+
+
+@pytest.fixture(scope="session")
 def sidewall_runs(runs):
     """{name: {pressure: Run}} at 120 and 80 psi (E05, E07, E08: per pressure, no load), the default
     method: inflation and hold as static equilibria, the release a transient from the held state."""

@@ -57,9 +57,14 @@ def test_declared_quantities_of_e13(e13_runs):
         check_run(run)
 
 
+def test_declared_quantities_of_e14(e14):
+    for run in e14.values():
+        check_run(run)
+
+
 def test_every_experiment_is_checked_somewhere(request):
     names = ({request.getfixturevalue(f).exp.name for f in RUN_FIXTURES} | set(SIDEWALL) | set(ELSEWHERE)
-             | {"sidewall_longitudinal"} | set(GATE_RUN_FIXTURES.values()))
+             | {"sidewall_longitudinal", "longitudinal_stiffness"} | set(GATE_RUN_FIXTURES.values()))
     assert names == set(REGISTRY)
     for cls in REGISTRY.values():  # the traced quantities are among those reduce writes
         assert set(cls.traced_names) <= set(cls.quantity_names), cls.name

@@ -223,6 +223,39 @@ def test_ellips_keys_come_from_the_nominal_rows_tandem_cam(char):
     assert plain["ELLIPS_SHIFT"] == (0.8, "default: no enveloping identified") and derive(char.rated_row(), char.tire).ellips is None
 
 
+def test_longitudinal_stiffness_is_e14s_when_measured(char):
+    """With E14's C_x in the rows LONGITUDINAL_STIFFNESS is the rated row's and PCFX1, PCFX2 fit E14's
+    values over load (here C_x = 1.1 x the ring's series value x (1 + 0.2 dfz)); the notes give the
+    ring's series value beside it. Without E14, the series value, said so."""
+    from jtire.rigid_ring.table import Characterization
+
+    fz0 = char.rated_row().load_N
+
+    def c_x(r):
+        return 1.1 * derive(r, char.tire).C_x * (1.0 + 0.2 * (r.load_N / fz0 - 1.0))
+
+    rows = tuple(dataclasses.replace(r, q=r.q | {"C_x_N_per_m": c_x(r)}) for r in char.rows)
+    sections, notes = tir.build(Characterization(char.tire, rows))
+    v = {k: (val, com) for rows in sections.values() for k, val, com in rows}
+    d = derive(char.rated_row(), char.tire)
+    assert v["LONGITUDINAL_STIFFNESS"][0] == pytest.approx(1.1 * d.C_x, rel=1e-12)
+    assert "E14" in v["LONGITUDINAL_STIFFNESS"][1]
+    assert any(n.startswith("LONGITUDINAL_STIFFNESS") and "-9.1 %" in n for n in notes)  # 1/1.1 - 1
+    # PCFX1, PCFX2: the least-squares fit of C_x / C_x0 - 1 on dfz, dfz^2 over the rated pressure's rows,
+    # taken on E14's values (not the ring's: those would give another fit)
+    same_p = [r for r in rows if _near_p(r.pressure_Pa, d.pressure_Pa)]
+    x = np.array([r.load_N / fz0 - 1.0 for r in same_p])
+    y = np.array([r.q["C_x_N_per_m"] / (1.1 * d.C_x) - 1.0 for r in same_p])
+    c = np.linalg.lstsq(np.column_stack([x, x * x]), y, rcond=None)[0]
+    assert v["PCFX1"][0] == pytest.approx(c[0], rel=1e-9) and v["PCFX2"][0] == pytest.approx(c[1], rel=1e-9, abs=1e-12)
+    plain = {k: (val, com) for rows in tir.build(char)[0].values() for k, val, com in rows}
+    assert plain["LONGITUDINAL_STIFFNESS"][0] == pytest.approx(d.C_x) and "no E14" in plain["LONGITUDINAL_STIFFNESS"][1]
+
+
+def _near_p(p, ref):
+    return abs(p / ref - 1.0) < 1e-6
+
+
 def test_inertia_keys_are_the_whole_tire_when_recorded():
     """IXX, IYY: the whole tire without rim (belt + the mesh's sidewalls and beads), which a thin-ring
     check bounds: the belt's I_by alone is below it and m_tire R0^2 above it (no node lies outside

@@ -204,14 +204,14 @@ def test_every_experiment_has_a_config_to_sweep():
     from jtire.experiments import REGISTRY
 
     named = {load_run_config(REPO / "configs" / "experiments" / n).experiments[0].name for n in EXPERIMENT_CONFIGS}
-    # slip_step (V03) is the rigid-ring validation's shell run; the study's twelve and jtire's E13
-    assert named == set(REGISTRY) - {"slip_step"} and len(named) == 13
+    # slip_step (V03) is the rigid-ring validation's shell run; the study's twelve and jtire's E13 and E14
+    assert named == set(REGISTRY) - {"slip_step"} and len(named) == 14
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("config", EXPERIMENT_CONFIGS)
 def test_sweep_runs_every_experiment_at_every_grid_condition(config, tmp_path, capsys):
-    """`jtire sweep` of each of the thirteen experiment configs over the study's whole 3 x 3 grid (loads
+    """`jtire sweep` of each of the fourteen experiment configs over the study's whole 3 x 3 grid (loads
     2312.5 / 4625 / 6937.5 kg x 70 / 120 / 150 psi; E05, E07, E08, E13 once per pressure), on the coarse ring
     with the suite's protocol and each config's own stage lengths: every case finishes (no blow-up, no
     failed equilibrium or settling check: a failed required check is an error, so exit 0 means every

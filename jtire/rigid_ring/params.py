@@ -96,9 +96,10 @@ class Derived:
     k_cy_source: str | None  # "series compliance" or "fallback sigma_c = a (...)"
     k_l_ring: float | None  # lateral stiffness of the ring with this k_cy (rim camber held)
     k_l_ring_rel_error: float | None
-    C_x: float | None  # LONGITUDINAL_STIFFNESS: 1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta
+    C_x: float | None  # the ring's standstill fore-aft stiffness: 1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta
     trail: float | None  # k_m / k_f
     k_bx_source: str | None = None  # "E13" (measured) or the isotropy assumption's name
+    C_x_shell: float | None = None  # E14's measured standstill C_x: the .tir's LONGITUDINAL_STIFFNESS when there
     k_vt: float | None = None  # E02's tangent vertical stiffness at the load (None: not measured)
     k_vr_secant: float | None = None  # residual spring's secant at the load: 1/k_sv - 1/k_bz
     k_vr1: float | None = None  # contact law F = k_vr1 rho + k_vr2 rho^2 (N/m, N/m^2): its secant at the
@@ -296,7 +297,7 @@ def derive(row: ConditionRow, tire: TireInfo, lateral_springs: str = "maxwell") 
         k_vr_B=k_vr_b, k_bz=k_bz, k_vr=k_vr, tau=tau, C_bz=split[0], C_vr=split[1],
         C_bz_B=times(tau, k_bz_b), C_vr_B=times(tau, k_vr_b), k_bx=k_bx, C_bx=c_bx, sigma=sigma,
         k_cy=k_cy, sigma_c=sigma_c, C_cy=c_cy, k_cy_source=src, k_l_ring=k_l_ring, k_l_ring_rel_error=k_l_err,
-        C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src,
+        C_x=c_x, trail=k_m / k_f if _ok(k_m, k_f) and k_f != 0 else None, k_bx_source=bx_src, C_x_shell=g("C_x_N_per_m"),
         k_vt=k_t, **res, damping_source=split[2], mz_curve=mz_curve(row.curves), ellips=_ellips(row),
         k_l_static=k_l_static, lateral_storage_ratio=storage, lateral_spring_source=lat_src, C_cy_source=c_cy_src,
         lateral_branch=branch)

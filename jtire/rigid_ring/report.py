@@ -30,6 +30,7 @@ DERIVED = (
     ("C_bz_B_Ns_per_m", "C_bz (B)", "N s/m", "N s/m", 1.0, "in", "C_bz_B"),
     ("C_vr_B_Ns_per_m", "C_vr (B)", "N s/m", "N s/m", 1.0, "in", "C_vr_B"),
     ("tau_s", "tau = C_tot/k_sv", "s", "ms", 1e3, "in", "tau"),
+    ("C_x_ring_N_per_m", "C_x (ring: 1/k_cx + 1/k_bx + r_b^2/k_btheta)", "N/m", "kN/m", 1e-3, "in", "C_x"),
     ("k_cy_N_per_m", "k_cy", "N/m", "kN/m", 1e-3, "out", "k_cy"),
     ("sigma_c_m", "sigma_c", "m", "mm", 1e3, "out", "sigma_c"),
     ("sigma_kf_over_kl_m", "k_f/k_l", "m", "mm", 1e3, "out", "sigma"),

@@ -1,7 +1,7 @@
 """The characterization: what `jtire characterize` writes and every rigid-ring tool reads.
 
 A characterization is the tire's reference data plus one row per condition (load x pressure) holding the SI
-quantities of E01-E13 and E10's and E06's curves. A quantity may be missing (not run, or failed): absent or None.
+quantities of E01-E14 and E10's and E06's curves. A quantity may be missing (not run, or failed): absent or None.
 
 `characterization.json` layout (SI; the writer adds "quantities" for the reader's eye, the reader ignores it):
 
@@ -80,6 +80,8 @@ QUANTITIES = (
     _q("C_bx_Ns_per_m", "C_bx", "N s/m", "E13", "longitudinal sidewall damping (rigid belt, fore-aft)", "in", True),
     _q("k_k_N_per_slip", "k_k", "N", "E06", "longitudinal slip stiffness", "in", display=("kN", 1e-3)),
     _q("k_cx_N_per_m", "k_cx", "N/m", "E06", "tread longitudinal stiffness k_k / a", "in", display=("kN/m", 1e-3)),
+    _q("C_x_N_per_m", "C_x", "N/m", "E14", "longitudinal stiffness at standstill (fore-aft at the rim)", "in",
+       display=("kN/m", 1e-3)),
     _q("rolling_resistance_N", "F_r", "N", "E12", "rolling resistance (free-rolling hub drag)", "in"),
     _q("k_by_N_per_m", "k_by", "N/m", "E07", "lateral sidewall stiffness", "out", display=("kN/m", 1e-3)),
     _q("C_by_Ns_per_m", "C_by", "N s/m", "E07", "lateral sidewall damping", "out", True),
@@ -115,12 +117,7 @@ def variant_keys(q: Quantity) -> tuple:
 
 
 def all_keys() -> tuple:
-    out = []
-    for q in QUANTITIES:
-        out.append(q.key)
-        if q.damping:
-            out += list(variant_keys(q))
-    return tuple(out) + EXTRA_KEYS
+    return tuple(k for q in QUANTITIES for k in (q.key, *(variant_keys(q) if q.damping else ()))) + EXTRA_KEYS
 
 
 @dataclasses.dataclass(frozen=True)

@@ -152,7 +152,15 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
         put("VERTICAL_STIFFNESS", d0.k_sv, f"k_sv (E02) at {at}")
     put("VERTICAL_DAMPING", d0.C_tot, f"C_tot (E04) at {at}")
     put("BOTTOM_STIFF", None if d0.k_sv is None else 10 * d0.k_sv, "[A] 10 k_sv")
-    put("LONGITUDINAL_STIFFNESS", d0.C_x, f"1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta at {at}")
+    cx = "C_x_shell" if d0.C_x_shell is not None else "C_x"  # E14's push when measured, else the ring's springs
+    if d0.C_x_shell is not None:
+        put("LONGITUDINAL_STIFFNESS", d0.C_x_shell, f"C_x, E14's standstill push at the rim, at {at}")
+        if d0.C_x is not None:
+            rel = 100 * (d0.C_x / d0.C_x_shell - 1)
+            notes.append(f"LONGITUDINAL_STIFFNESS {d0.C_x_shell:.4g} N/m is E14's; the ring's springs in series "
+                         f"(1/k_cx + 1/k_bx + r_b^2/k_btheta) give {d0.C_x:.4g} ({rel:+.1f} %)")
+    else:
+        put("LONGITUDINAL_STIFFNESS", d0.C_x, f"1/C_x = 1/k_cx + 1/k_bx + r_b^2/k_btheta at {at} (no E14)")
     put("LATERAL_STIFFNESS", d0.k_l_static, f"k_l (E09's static push) at {at}")
     if d0.k_l_static is not None and d0.a is not None:
         put("YAW_STIFFNESS", d0.k_l_static * d0.a**2 / 3, "[A] brush estimate k_l a^2/3 (not measured)")
@@ -194,8 +202,8 @@ def build(char, fit=None, longvl=6.7056, fittyp=61, rated=None, fit_x=None):
     mfr.put_keys(char, vals, put, notes, r0)
     load_law("k_l_static", "PCFY1", "PCFY2", "k_l")
     pressure_law("k_l_static", "PCFY3", "k_l")
-    load_law("C_x", "PCFX1", "PCFX2", "C_x")
-    pressure_law("C_x", "PCFX3", "C_x")
+    load_law(cx, "PCFX1", "PCFX2", "C_x")
+    pressure_law(cx, "PCFX3", "C_x")
     # contact patch: half length and half width against the static deflection rho = F_z / k_sv
     pa = [(d.rho / R0, d.a / R0) for d in ds_p if d.rho is not None and d.a is not None]
     if len(pa) >= 2:
