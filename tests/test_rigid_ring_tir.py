@@ -243,17 +243,13 @@ def test_longitudinal_stiffness_is_e14s_when_measured(char):
     assert any(n.startswith("LONGITUDINAL_STIFFNESS") and "-9.1 %" in n for n in notes)  # 1/1.1 - 1
     # PCFX1, PCFX2: the least-squares fit of C_x / C_x0 - 1 on dfz, dfz^2 over the rated pressure's rows,
     # taken on E14's values (not the ring's: those would give another fit)
-    same_p = [r for r in rows if _near_p(r.pressure_Pa, d.pressure_Pa)]
+    same_p = [r for r in rows if math.isclose(r.pressure_Pa, d.pressure_Pa, rel_tol=1e-6)]
     x = np.array([r.load_N / fz0 - 1.0 for r in same_p])
     y = np.array([r.q["C_x_N_per_m"] / (1.1 * d.C_x) - 1.0 for r in same_p])
     c = np.linalg.lstsq(np.column_stack([x, x * x]), y, rcond=None)[0]
     assert v["PCFX1"][0] == pytest.approx(c[0], rel=1e-9) and v["PCFX2"][0] == pytest.approx(c[1], rel=1e-9, abs=1e-12)
     plain = {k: (val, com) for rows in tir.build(char)[0].values() for k, val, com in rows}
     assert plain["LONGITUDINAL_STIFFNESS"][0] == pytest.approx(d.C_x) and "no E14" in plain["LONGITUDINAL_STIFFNESS"][1]
-
-
-def _near_p(p, ref):
-    return abs(p / ref - 1.0) < 1e-6
 
 
 def test_inertia_keys_are_the_whole_tire_when_recorded():

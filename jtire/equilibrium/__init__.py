@@ -11,8 +11,10 @@ solve), `newton` (the solver, tolerance, implicit derivatives), `sequences` (loa
 from .newton import NewtonOptions, StaticInfo, check_static, solve_static, solve_static_full
 from .residual import Anchors, StaticSetup, make_setup
 from .sequences import (Levels, Path, anchors_of, belt_levels, concat, contact_force, first_contact_height,
-                        inflate_levels, lateral_levels, run_levels, static_path, tire_on_rim, vertical_levels)
+                        fore_aft_levels, inflate_levels, lateral_levels, run_levels, static_path, tire_on_rim,
+                        vertical_levels)
 
 __all__ = ["Anchors", "StaticSetup", "make_setup", "solve_static", "solve_static_full", "check_static", "NewtonOptions", "StaticInfo", "Levels",
            "Path", "run_levels", "static_path", "inflate_levels", "vertical_levels", "lateral_levels", "belt_levels",
+           "fore_aft_levels",
            "concat", "anchors_of", "first_contact_height", "contact_force", "tire_on_rim"]

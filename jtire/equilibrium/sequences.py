@@ -93,11 +93,23 @@ def vertical_levels(pressure, loads, *, d_touch=D_TOUCH, friction=True) -> Level
 def lateral_levels(pressure, vertical_load, lateral_loads, *, friction=True, reset_shear=False) -> Levels:
     """Lateral rim forces (L,) N (+y, to the left) at a constant vertical load (N, down), rim y and
     z free. reset_shear: the first lateral level anchors every tread point where it is."""
-    lat = jnp.atleast_1d(jnp.asarray(lateral_loads, jnp.float64))
-    n = lat.shape[0]
-    force = jnp.zeros((n, 6)).at[:, 1].set(lat).at[:, 2].set(-jnp.asarray(vertical_load, jnp.float64))
+    return _push_levels(pressure, vertical_load, lateral_loads, 1, friction, reset_shear)
+
+
+def fore_aft_levels(pressure, vertical_load, forces, *, friction=True) -> Levels:
+    """Fore-aft rim forces (L,) N (+x, forward) at a constant vertical load (N, down), rim x and z
+    free, its spin held (E14)."""
+    return _push_levels(pressure, vertical_load, forces, 0, friction, False)
+
+
+def _push_levels(pressure, vertical_load, loads, axis, friction, reset_shear) -> Levels:
+    """Rim forces (L,) along rim coordinate `axis` (0: x, 1: y) at a constant vertical load, that
+    coordinate and z free."""
+    push = jnp.atleast_1d(jnp.asarray(loads, jnp.float64))
+    n = push.shape[0]
+    force = jnp.zeros((n, 6)).at[:, axis].set(push).at[:, 2].set(-jnp.asarray(vertical_load, jnp.float64))
     reset = jnp.zeros(n).at[0].set(1.0 if reset_shear else 0.0)
-    return Levels.make(pressure, rim_force=force, rim_free=np.array([0, 1.0, 1, 0, 0, 0]),
+    return Levels.make(pressure, rim_force=force, rim_free=np.eye(6)[axis] + np.eye(6)[2],
                        friction_on=1.0 if friction else 0.0, reset_shear=reset, n=n)
 
 

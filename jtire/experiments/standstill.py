@@ -12,23 +12,17 @@ import numpy as np
 
 from .. import equilibrium as EQ
 from .. import units as U
-from ..equilibrium.sequences import Levels
 from ..schema import Field
 from .base import Experiment
 from .program import f64, require_equilibrium
 from .result import ExperimentResult
 from .static_path import STATIC_LOADS, check_static_path, static_summary
 
-RIM_XZ = np.array([1.0, 0, 1, 0, 0, 0])  # rim x and z free, its spin (index 4) held
-
-
 def _fore_aft_path(model, params, pressure, loads, forces):
     """E01's vertical levels to loads[-1], then the fore-aft rim forces `forces` (N, +x) at that load.
     Returns the last vertical level's q, the fore-aft levels' q and contact force, and every info."""
-    n = forces.shape[0]
-    f = jnp.zeros((n, 6)).at[:, 0].set(forces).at[:, 2].set(-loads[-1])
     path = EQ.static_path(model, params, pressure, EQ.vertical_levels(pressure, loads),
-                          Levels.make(pressure, rim_force=f, rim_free=RIM_XZ, friction_on=1.0, n=n))
+                          EQ.fore_aft_levels(pressure, loads[-1], forces))
     m = loads.shape[0] + 2
     vert = jax.tree_util.tree_map(lambda a: a[:m], path)
     fa = jax.tree_util.tree_map(lambda a: a[m:], path)
