@@ -6,6 +6,9 @@
   residual of ~1e-6 of the load scale, and x is a 2 mm deflection under a 45 kN load).
 - Linearity: a 2 kN push on a 45 kN load is far from sliding (friction ~0.9 F_z), so the secant at F/2
   equals the one at F within 1 %.
+- Scheduling: E14 is static levels only, so it takes no explicit step and runs case by case, unbatched
+  (a vmapped Newton loop runs both branches of its conditionals: several times an unbatched case's
+  wall, docs/speed.md).
 - Series bound (gate): the rim's fore-aft push goes through the sidewall (E13's k_bx), the belt's
   rotation about its centre (E05's k_btheta, the patch r below it) and the tread in series, so
   1/C_x > 1/k_bx + r^2/k_btheta with r the loaded radius (below the belt centre's height: a weaker
@@ -14,7 +17,7 @@
 
 import pytest
 
-from .conftest import P_RATED, ok
+from .conftest import P_RATED, make_experiment, ok
 
 
 def _q(run):
@@ -30,6 +33,12 @@ def test_forward_and_backward_pushes_agree(e14):
         assert q["longitudinal_force_N"] == pytest.approx(2000.0)
         # a truck tire's fore-aft stiffness at rest is of order 1 MN/m (deflection ~2 mm under 2 kN)
         assert 2e5 < q["C_x_N_per_m"] < 5e6
+
+
+def test_e14_is_static_and_runs_unbatched(protocol, spec, e14):
+    exp = make_experiment("longitudinal_stiffness", protocol, spec)
+    assert not exp.time_stepped and not exp.shardable
+    assert "dt_s" not in ok(e14["forward"].results[0]).info  # no explicit step was computed for it
 
 
 @pytest.mark.slow

@@ -45,6 +45,10 @@ class LongitudinalStiffness(Experiment):
     force: jax.Array  # N, > 0
     sign: float = eqx.field(static=True, default=1.0)  # +1 forward (+x), -1 backward
 
+    @property
+    def time_stepped(self) -> bool:
+        return False  # static levels only: no explicit step, and run unbatched (a vmapped Newton loop runs both branches)
+
     @classmethod
     def from_table(cls, table, proto, tire_spec):
         return cls(proto=proto, force=f64(table["force_kN"]), sign=1.0 if table["direction"] == "forward" else -1.0)
