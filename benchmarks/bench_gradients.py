@@ -6,7 +6,8 @@ MaterialParams, every one a calibratable modulus, thickness, loss or friction). 
 with every transient phase checkpointed (diffrax RecursiveCheckpointAdjoint, 1024 stored states; the
 static solves differentiate implicitly either way). The steps are held at their values (a numerical
 setting, not physics). Every figure is the best of --repeat runs (compile excluded: each program runs
-once before it is timed).
+once before it is timed). The persistent compilation cache is on, as for the command line: the first
+run in a fresh cache compiles (slower, more memory), later runs load the programs.
 
     python benchmarks/bench_gradients.py                      # default mesh
     python benchmarks/bench_gradients.py --mesh 32x5x4 --short
@@ -38,11 +39,12 @@ def main(argv=None):
     import numpy as np
 
     import jtire  # noqa: F401
-    from jtire import batch
+    from jtire import batch, cache
     from jtire.calibration.tire.shell import traced_jacobian
     from jtire.config import load_run_config
     from jtire.tire import make_tire
 
+    cache.enable()
     nt, ns, nc = (int(v) for v in args.mesh.split("x"))
     mesh = [f"tire.mesh.n_theta={nt}", f"tire.mesh.n_side={ns}", f"tire.mesh.n_crown={nc}"]
     if args.calibration:
@@ -93,6 +95,8 @@ def main(argv=None):
 def calibration_jacobian(args, mesh):
     """The m x d Jacobian of a calibration's targets at the base tire, first call (compiles) and
     after, against one evaluation of the targets (after compile)."""
+    import resource
+
     import numpy as np
 
     import jtire  # noqa: F401
@@ -102,28 +106,34 @@ def calibration_jacobian(args, mesh):
     spec = load_calibration(args.calibration, mesh)
     sim = ShellSimulator(spec, spec.tire)
     theta = np.asarray(spec.space.from_params(spec.base_params))
+    peak = lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6  # noqa: E731  (Linux: KB)
     t0 = time.perf_counter()
     sim.evaluate(theta[None])
     first_eval = time.perf_counter() - t0
+    peaks = [peak()]
     te = []
     for _ in range(args.repeat):
         t0 = time.perf_counter()
         y = sim.evaluate(theta[None])[0]
         te.append(time.perf_counter() - t0)
+    peaks.append(peak())
     tj = []
     for k in range(args.repeat + 1):
         t0 = time.perf_counter()
         v, J = sim.jacobian(theta)
         tj.append(time.perf_counter() - t0)
         split = dict(sim.last_wall)
+        if k == 0:
+            peaks.append(peak())
+    peaks.append(peak())
     e, j = min(te), min(tj[1:])
     print(f"target Jacobian of {args.calibration}, mesh {args.mesh}: {J.shape[0]} targets x {J.shape[1]} parameters")
-    print("| what | wall [s] | forward-run equivalents |")
-    print("|---|---|---|")
-    print(f"| one evaluation of the targets (first call, compiles) | {first_eval:.1f} | |")
-    print(f"| one evaluation of the targets | {e:.1f} | 1 |")
-    print(f"| Jacobian, first call (compiles) | {tj[0]:.1f} | {tj[0] / e:.1f} |")
-    print(f"| Jacobian | {j:.1f} | {j / e:.1f} |")
+    print("| what | wall [s] | forward-run equivalents | peak RSS so far [GB] |")
+    print("|---|---|---|---|")
+    print(f"| one evaluation of the targets (first call, compiles) | {first_eval:.1f} | | {peaks[0]:.2f} |")
+    print(f"| one evaluation of the targets | {e:.1f} | 1 | {peaks[1]:.2f} |")
+    print(f"| Jacobian, first call (compiles) | {tj[0]:.1f} | {tj[0] / e:.1f} | {peaks[2]:.2f} |")
+    print(f"| Jacobian | {j:.1f} | {j / e:.1f} | {peaks[3]:.2f} |")
     print("values by the Jacobian's programs vs the evaluation: "
           + ", ".join(f"{n} {a:.6g} / {b:.6g}" for n, a, b in zip(sim.response_names, v, y)))
     print("wall split of the last Jacobian [s]: " + ", ".join(f"{k} {w:.1f}" for k, w in split.items()))

@@ -25,14 +25,13 @@ N_FIT = 4  # modes in the fixed fit: enough for two close modes beside the band'
 
 
 def peaks(t, y, band, t_start):
-    """The padded Hann spectrum's local maxima in band above PEAK_FLOOR of the largest: [(Hz, relative)]."""
+    """The spectrum's local maxima in band above PEAK_FLOOR of the largest, by frequency: [(Hz, relative)],
+    and the record's raw resolution (Hz)."""
     from jtire import spectra
 
     keep = t >= t_start
-    f, mag, raw, _ = spectra.amplitude_spectrum(t[keep], y[keep], 0.05, band)
-    i = np.flatnonzero((mag[1:-1] > mag[:-2]) & (mag[1:-1] >= mag[2:])) + 1
-    i = i[mag[i] >= PEAK_FLOOR * mag.max()]
-    return [(float(spectra.interpolate_peak(f, mag, k)[0]), float(mag[k] / mag.max())) for k in i], raw
+    raw = 1.0 / (np.count_nonzero(keep) * spectra.uniform_step(t[keep]))
+    return sorted(spectra.spectrum_peaks(t, y, band, t_start=t_start, floor=PEAK_FLOOR)), raw
 
 
 def read(t, y, band, t_start):

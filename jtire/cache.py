@@ -109,6 +109,18 @@ def release_programs_if_crowded(fraction: float = CROWDED_FRACTION) -> bool:
 _CLEARS = [0]
 
 
+def return_free_memory() -> bool:
+    """Hand the heap's free pages back to the system (glibc's malloc_trim). Compiling or loading a
+    program frees gigabytes that glibc otherwise keeps mapped in this process, so a long job's resident
+    memory climbs with every program it makes (docs/speed.md). False where there is no glibc."""
+    try:
+        import ctypes
+
+        return bool(ctypes.CDLL("libc.so.6").malloc_trim(0))
+    except (OSError, AttributeError):
+        return False
+
+
 def clears() -> int:
     """How many times this process dropped its in-memory programs (a program used after a clear is
     traced again, so tests that count traces account for it)."""

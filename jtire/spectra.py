@@ -149,6 +149,24 @@ def interpolate_peak(f, mag, i):
     return float(f[i] + p * (f[1] - f[0])), float(np.exp(b - 0.25 * (a - c) * p))
 
 
+def spectrum_peaks(t, y, f_band, t_start=None, floor=0.0, n=None, pad_to_resolution=0.05):
+    """Local maxima of `amplitude_spectrum` (Hann, linear detrend) of y(t >= t_start) in f_band, each
+    refined by `interpolate_peak`: [(f Hz, height relative to the largest)], highest first, those at or
+    above `floor` of the largest, at most n of them."""
+    t, y = check_signal(t, y)
+    if t_start is not None:
+        keep = t >= t_start
+        t, y = t[keep], y[keep]
+    f, mag, _, _ = amplitude_spectrum(t, y, pad_to_resolution, f_band)
+    i = np.flatnonzero((mag[1:-1] >= mag[:-2]) & (mag[1:-1] > mag[2:])) + 1
+    if i.size == 0:
+        return []
+    i = i[np.argsort(-mag[i], kind="stable")]
+    i = i[mag[i] >= floor * mag[i[0]]][:n]
+    top = interpolate_peak(f, mag, int(i[0]))[1]
+    return [(interpolate_peak(f, mag, int(k))[0], interpolate_peak(f, mag, int(k))[1] / top) for k in i]
+
+
 # ---- damped-mode fit ----------------------------------------------------------------------
 def _mode_columns(s, omega_n, xi):
     """Two basis columns e^{-xi wn s} (cos(wd s), sin(wd s)/wd) and their continuation for

@@ -11,7 +11,7 @@ import jtire  # noqa: F401  (float64)
 from jtire.errors import ConfigError
 from jtire.io import atomic_write_json
 from jtire.signals import free_decay, is_steady, linear_slope, peaks, secant, steady_mean
-from jtire.spectra import amplitude_spectrum, first_mode, fit_modes
+from jtire.spectra import amplitude_spectrum, first_mode, fit_modes, spectrum_peaks
 
 M = 70.75  # kg, the belt mass m_b of E07
 FN = 12.0  # Hz, undamped natural frequency of the synthetic oscillators
@@ -218,6 +218,21 @@ def test_fit_modes_two_known_modes():
     np.testing.assert_allclose(mf.omega_n[order], 2 * np.pi * np.array([20.0, 50.0]), rtol=1e-8)
     np.testing.assert_allclose(mf.xi[order], [0.02, 0.1], rtol=1e-8)
     np.testing.assert_allclose(mf.predict(t), y, atol=1e-9)
+
+
+def test_spectrum_peaks_two_lightly_damped_modes():
+    """Two modes 10 Hz apart, well resolved by a 1 s record (1 Hz bins, Hann main lobe 4 Hz): each peak
+    within 0.1 Hz of its damped frequency (the parabolic refinement on a 0.05 Hz grid), highest first;
+    a sinusoid of a twentieth the amplitude below the floor is left out, and t_start cuts the record."""
+    t = np.arange(0.0, 1.2, 1e-3)
+    y = (np.exp(-0.002 * 2 * np.pi * 60 * t) * np.cos(2 * np.pi * 60 * t) + 0.3 * np.sin(2 * np.pi * 70 * t)
+         + 0.05 * np.sin(2 * np.pi * 110 * t) + 3.0 * (t < 0.2))  # the step before t_start is cut
+    pk = spectrum_peaks(t, y, (20.0, 150.0), t_start=0.2, floor=0.2)
+    assert [round(f) for f, _ in pk] == [60, 70]  # the mode (halving over the record) first
+    assert abs(pk[0][0] - 60.0) < 0.1 and abs(pk[1][0] - 70.0) < 0.1
+    assert pk[0][1] == 1.0 and 0.2 < pk[1][1] < 1.0
+    assert len(spectrum_peaks(t, y, (20.0, 150.0), t_start=0.2)) >= 3  # no floor: the 110 Hz line too
+    assert len(spectrum_peaks(t, y, (20.0, 150.0), t_start=0.2, n=1)) == 1
 
 
 # ---- slopes, secants, steady state --------------------------------------------------------

@@ -340,6 +340,7 @@ def traced_jacobian(exp, tire, params_of, theta, conditions, quantities, mode: s
     jax.jacrev with every transient phase checkpointed (`experiments.program.reverse_mode`): one
     backward sweep per quantity, whatever d is."""
     cache.release_programs_if_crowded()  # every Jacobian compiles programs of its own
+    cache.return_free_memory()  # what the last programs' making freed, before this one makes more
     if (mode == "reverse" or not exp.shardable) and len(conditions) > 1:
         # one condition after another: a backward sweep of a transient holds a lot of memory for one case
         # (benchmarks/bench_gradients.py; docs/design-notes.md), and a vmapped Newton solve (static,

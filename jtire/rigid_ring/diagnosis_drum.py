@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .. import spectra
 from .diagnosis_base import FULL, NONE, PARTIAL, _n, _p, _verdict, _within
 from .modes import belt_vertical_mode, fore_aft_modes
 
@@ -97,19 +98,9 @@ def _shell_fx_peaks(cx):
     if rec is None:
         return None
     t, fx, t0, band = rec
-    m = t >= t0
-    tt, y = t[m], fx[m]
-    if tt.size < 16:
+    if np.count_nonzero(t >= t0) < 16:
         return None
-    y = y - np.polyval(np.polyfit(tt, y, 1), tt)
-    dt = float(np.median(np.diff(tt)))
-    X = np.abs(np.fft.rfft(y * np.hanning(y.size), 16 * y.size))
-    f = np.fft.rfftfreq(16 * y.size, dt)
-    sel = (f > band[0]) & (f < band[1])
-    f, X = f[sel], X[sel]
-    pk = [i for i in range(1, X.size - 1) if X[i] >= X[i - 1] and X[i] > X[i + 1]]
-    pk = sorted(pk, key=lambda i: -X[i])[:3]
-    return [(float(f[i]), float(X[i] / X[pk[0]])) for i in pk] if pk else None
+    return spectra.spectrum_peaks(t, fx, band, t_start=t0, n=3) or None
 
 
 def _drum_fore_aft_f(cx, c):
