@@ -163,8 +163,8 @@ def spectrum_peaks(t, y, f_band, t_start=None, floor=0.0, n=None, pad_to_resolut
         return []
     i = i[np.argsort(-mag[i], kind="stable")]
     i = i[mag[i] >= floor * mag[i[0]]][:n]
-    top = interpolate_peak(f, mag, int(i[0]))[1]
-    return [(interpolate_peak(f, mag, int(k))[0], interpolate_peak(f, mag, int(k))[1] / top) for k in i]
+    refined = [interpolate_peak(f, mag, int(k)) for k in i]
+    return [(fk, mk / refined[0][1]) for fk, mk in refined]
 
 
 # ---- damped-mode fit ----------------------------------------------------------------------

@@ -44,10 +44,8 @@ class LongitudinalStiffness(Experiment):
 
     force: jax.Array  # N, > 0
     sign: float = eqx.field(static=True, default=1.0)  # +1 forward (+x), -1 backward
-
-    @property
-    def time_stepped(self) -> bool:
-        return False  # static levels only: no explicit step, and run unbatched (a vmapped Newton loop runs both branches)
+    # static levels only: with it, `time_stepped` and `shardable` say no explicit step and an unbatched run
+    method: str = eqx.field(static=True, default="static")
 
     @classmethod
     def from_table(cls, table, proto, tire_spec):
