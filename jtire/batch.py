@@ -118,15 +118,15 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
     condition. batch: cases per batch (0: all at once; 1: case by case, each saved the moment it is
     done). on_result(i, result_or_failure) is called as soon as condition i is reduced;
     on_batch(n_conditions_done, n_total, wall_s) after every batch. keep_outputs: attach the raw
-    per-case outputs (numpy) as result.outputs (for traced checks). device: run a static experiment's
-    cases on this one device (a caller running several static experiments at once gives each its own);
+    per-case outputs (numpy) as result.outputs (for traced checks). device: run every case on this one
+    device (a caller running several runs at once, `side_by_side`, gives each its own);
     None: with several devices and batches of one case (statics always, transients with batch = 1),
     the cases run side by side, one per device at a time. Larger transient batches take every device.
     """
     cache.release_programs_if_crowded()  # between runs: a process holding too many programs crashes
     if hasattr(exp, "components"):  # a composite (E11): its components' results combined per condition
-        subs = [run(c, tire, conditions, params_list, devices=devices, batch=batch, keep_outputs=keep_outputs)
-                for c in exp.components]
+        subs = [run(c, tire, conditions, params_list, devices=devices, batch=batch, keep_outputs=keep_outputs,
+                    device=device) for c in exp.components]
         results = []
         for i, cond in enumerate(conditions):
             parts = [s[i] for s in subs]
@@ -183,7 +183,8 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
                 got = pending.pop(i)
                 res = _reduce(exp, tire, conditions[i], [got[c] for c in sorted(got)], keep_outputs, wall / len(chunk))
                 if isinstance(res, CaseFailure) and isinstance(res.error, UnderResolved):
-                    res = _refined(exp, tire, conditions[i], plist[i] if params_batched else None, keep_outputs, res)
+                    res = _refined(exp, tire, conditions[i], plist[i] if params_batched else None, keep_outputs, res,
+                                   device)
                 results[i] = res
                 done += 1
                 if on_result is not None:
@@ -196,42 +197,53 @@ def run(exp, tire, conditions: list, params_list=None, *, devices=None, batch: i
         for start in starts:
             collect(*run_chunk(start, int(device or 0)))
         return results
-    # Batches of one case (static solves always), several of them, several devices: the cases run side
-    # by side, one per device at a time (threads; JAX releases the GIL while a program runs), and are
-    # reduced and handed to on_result here, in this thread, as each finishes: faster than one after the
-    # other (docs/design-notes.md).
+    # Batches of one case (static solves always), several of them, several devices: side by side
+    side_by_side([lambda d, st=st: run_chunk(st, d) for st in starts], lambda k, got: collect(*got), avail)
+    return results
+
+
+def side_by_side(jobs, on_done, devices=None) -> None:
+    """Run `jobs` (callables job(device index) -> value) one per device at a time over the first
+    `devices` devices (default all), taken in list order as devices come free; on_done(k, value) runs
+    here, in the calling thread, as each finishes. Threads: JAX releases the GIL while a program runs,
+    so the cases run side by side, faster than one after the other (docs/design-notes.md). An error
+    in a job cancels the jobs not started and is raised here."""
     import queue
     from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
+    n = min(len(jax.devices()) if devices is None else int(devices), len(jax.devices()), len(jobs))
+    if n <= 1:
+        for k, job in enumerate(jobs):
+            on_done(k, job(0))
+        return
     free = queue.SimpleQueue()
-    for d in range(min(avail, len(jax.devices()))):
+    for d in range(n):
         free.put(d)
 
-    def on_free_device(start):
+    def on_free_device(job):
         d = free.get()
         try:
-            return run_chunk(start, d)
+            return job(d)
         finally:
             free.put(d)
 
-    with ThreadPoolExecutor(min(avail, len(starts))) as pool:
-        todo = {pool.submit(on_free_device, st) for st in starts}
+    with ThreadPoolExecutor(n) as pool:
+        todo = {pool.submit(on_free_device, job): k for k, job in enumerate(jobs)}
         try:
             while todo:
-                fin, todo = wait(todo, return_when=FIRST_COMPLETED)
+                fin, _ = wait(todo, return_when=FIRST_COMPLETED)
                 for f in fin:
-                    collect(*f.result())
+                    on_done(todo.pop(f), f.result())
         except BaseException:
             for f in todo:
                 f.cancel()
             raise
-    return results
 
 
 MAX_REFINED_N_THETA = 256  # segments: a case whose result is under-resolved is rerun on up to this many
 
 
-def _refined(exp, tire, condition, params, keep, failure):
+def _refined(exp, tire, condition, params, keep, failure, device=None):
     """A case that failed a discretization check of its own (`UnderResolved`) rerun on a ring with twice
     the segments (again, up to MAX_REFINED_N_THETA); the result says which ring gave it and why. The
     failure stands where the ring cannot be refined further."""
@@ -241,7 +253,7 @@ def _refined(exp, tire, condition, params, keep, failure):
     if 2 * n > MAX_REFINED_N_THETA:
         return failure
     fine = make_tire(dataclasses.replace(tire.spec, n_theta=2 * n))
-    [res] = run(exp, fine, [condition], None if params is None else [params], batch=1, keep_outputs=keep)
+    [res] = run(exp, fine, [condition], None if params is None else [params], batch=1, keep_outputs=keep, device=device)
     if not isinstance(res, CaseFailure):  # an inner refinement set n_theta; the first reason is kept
         res.info.setdefault("n_theta", fine.spec.n_theta)
         res.info |= {"refined_from_n_theta": n, "refined_because": str(failure.error)}

@@ -29,28 +29,36 @@ NAMES = ("l_s", "a_e", "b_e", "c_e")
 SLOPE_WEIGHT = 0.1  # of the slope's residuals against the height's (see `fit`)
 
 
-def cleat_height(x, r, h):
-    """Height (m) of a cylinder of radius r standing h above the road, at x from its crest (0 outside)."""
-    half = jnp.sqrt(jnp.clip(r**2 - (r - h) ** 2, 0.0))
-    return jnp.where(jnp.abs(x) < half, jnp.sqrt(jnp.clip(r**2 - x**2, 0.0)) - (r - h), 0.0)
+def cleat_height(x, r, h, xp=jnp):
+    """Height (m) of a cylinder of radius r standing h above the road, at x from its crest (0 outside).
+    xp: the array module (jax.numpy, traced; numpy for the host's fit)."""
+    half = xp.sqrt(xp.clip(r**2 - (r - h) ** 2, 0.0, None))
+    return xp.where(xp.abs(x) < half, xp.sqrt(xp.clip(r**2 - x**2, 0.0, None)) - (r - h), 0.0)
 
 
-def cam_height(X, a_e, b_e, c_e, r, h):
-    """Height (m) of the lowest point of a cam centred at X over the cleat (0 on the flat road)."""
-    half = jnp.sqrt(jnp.clip(r**2 - (r - h) ** 2, 0.0))
-    x = jnp.linspace(-1.0, 1.0, N_CHORD) * half
-    xi = jnp.abs(x - X) / a_e
+def cam_height(X, a_e, b_e, c_e, r, h, xp=jnp):
+    """Height (m) of the lowest point of a cam centred at X over the cleat (0 on the flat road); X
+    a scalar, or a column (n, 1) for n positions at once."""
+    half = xp.sqrt(xp.clip(r**2 - (r - h) ** 2, 0.0, None))
+    x = xp.linspace(-1.0, 1.0, N_CHORD) * half
+    xi = xp.abs(x - X) / a_e
     inside = xi < 1.0
-    rise = b_e * (1.0 - jnp.clip(1.0 - jnp.where(inside, xi, 0.0) ** c_e, 1e-30) ** (1.0 / c_e))
-    lift = jnp.where(inside, cleat_height(x, r, h) - rise, 0.0)
-    return jnp.maximum(jnp.max(lift), 0.0)
+    rise = b_e * (1.0 - xp.clip(1.0 - xp.where(inside, xi, 0.0) ** c_e, 1e-30, None) ** (1.0 / c_e))
+    lift = xp.where(inside, cleat_height(x, r, h, xp) - rise, 0.0)
+    return xp.maximum(xp.max(lift, axis=-1), 0.0)
 
 
-def effective(s, l_s, a_e, b_e, c_e, r, h):
+def effective(s, l_s, a_e, b_e, c_e, r, h, xp=jnp):
     """(w, dw/dx) of the tandem under a contact point at s (module docstring)."""
-    wf = cam_height(s + 0.5 * l_s, a_e, b_e, c_e, r, h)
-    wr = cam_height(s - 0.5 * l_s, a_e, b_e, c_e, r, h)
+    wf = cam_height(s + 0.5 * l_s, a_e, b_e, c_e, r, h, xp)
+    wr = cam_height(s - 0.5 * l_s, a_e, b_e, c_e, r, h, xp)
     return 0.5 * (wf + wr), (wf - wr) / l_s
+
+
+def effective_many(s, l_s, a_e, b_e, c_e, r, h):
+    """(w, dw/dx) at every contact point of s (n,), in numpy: the fit calls it thousands of times on
+    the host, and a JAX call there would queue behind the simulation holding the default device."""
+    return effective(np.asarray(s, float)[:, None], l_s, a_e, b_e, c_e, r, h, np)
 
 
 def effective_with_rate(s, l_s, a_e, b_e, c_e, r, h):
@@ -62,9 +70,6 @@ def effective_with_rate(s, l_s, a_e, b_e, c_e, r, h):
 def reach(l_s, a_e, r, h):
     """Distance (m) from the cleat's crest beyond which the tandem does not touch it."""
     return cleat_half_chord(r, h) + 0.5 * l_s + a_e
-
-
-_effective_many = jax.jit(jax.vmap(effective, in_axes=(0, None, None, None, None, None, None)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -101,7 +106,7 @@ def fit(s, w, slope, r, h, a, R0) -> EnvelopingFit:
                                                        [1.2 * a, 2.0 * R0, 1.5 * R0, 1.5])]
 
     def resid(x):
-        we, se = _effective_many(s, *x, r, h)
+        we, se = effective_many(s, *x, r, h)
         return np.concatenate([(np.asarray(we) - w) / sw, SLOPE_WEIGHT * (np.asarray(se) - slope) / ss])
 
     best = None
@@ -111,7 +116,7 @@ def fit(s, w, slope, r, h, a, R0) -> EnvelopingFit:
         if best is None or res.cost < best.cost:
             best = res
     x = best.x
-    we, se = (np.asarray(v) for v in _effective_many(s, *x, r, h))
+    we, se = (np.asarray(v) for v in effective_many(s, *x, r, h))
     span = hi - lo
     bound = tuple(n for n, v, a_, b_, d in zip(NAMES, x, lo, hi, span) if v - a_ < 1e-3 * d or b_ - v < 1e-3 * d)
     return EnvelopingFit(*(float(v) for v in x), rms_height_m=float(np.sqrt(np.mean((we - w) ** 2))),

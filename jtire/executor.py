@@ -105,16 +105,34 @@ def _outcome(task: CaseTask, tire, res) -> Outcome:
 
 
 class InProcess:
-    """Today's runner: each group's conditions through `jtire.batch.run` in this process, in batches of
-    `batch_size` (1: case by case, side by side over the host devices, each handed on as it finishes)."""
+    """Today's runner: the tasks through `jtire.batch.run` in this process. batch_size 1 (case by case)
+    with several host devices: every task is its own run, side by side over the devices in task order
+    (`batch.side_by_side`), so the next experiment's cases start while the last of one still runs (an
+    experiment after another left a device idle at each one's end). Otherwise each group's conditions
+    in batches of `batch_size`, an experiment after another."""
 
     description = "this process"
 
     def run(self, tasks, on_outcome, batch_size: int = 1) -> None:
+        import jax
+
         from . import batch
 
+        built = {}  # group key -> (experiment, tire): one per group, shared by its tasks
         for idx in groups(tasks):
-            exp, tire = build(tasks[idx[0]])
+            built[_group_key(tasks[idx[0]])] = build(tasks[idx[0]])
+        if batch_size == 1 and len(jax.devices()) > 1:
+            def job(i):
+                exp, tire = built[_group_key(tasks[i])]
+                plist = None if tasks[i].params is None else [task_params(tasks[i], tire)]
+                return lambda d: (tire, batch.run(exp, tire, [tasks[i].condition], plist, batch=1, device=d,
+                                                  keep_outputs=tasks[i].contact_table)[0])
+
+            batch.side_by_side([job(i) for i in range(len(tasks))],
+                               lambda k, got: on_outcome(k, _outcome(tasks[k], *got)))
+            return
+        for idx in groups(tasks):
+            exp, tire = built[_group_key(tasks[idx[0]])]
             keep = tasks[idx[0]].contact_table
             plist = None
             if any(tasks[i].params is not None for i in idx):

@@ -242,17 +242,29 @@ def storage_pushes(root, plan, conds, freqs, on_case=None) -> list:
     table = dict(plan.tables.get("lateral_stiffness") or
                  validate_table({}, REGISTRY["lateral_stiffness"].schema, "lateral_stiffness"))
     table |= {"decay_s": 0.0, "method": "static"}
+    from .batch import side_by_side
+
     todo = [(i, c, f) for i, (c, f) in enumerate(zip(conds, freqs)) if f]
     out = [None] * len(conds)
     if on_case is not None:
         on_case(None, 0, len(todo))
-    for n, (i, c, f) in enumerate(todo):
+
+    def job(c, f):
         tire = storage_tire(plan.tire, f)
         exp = REGISTRY["lateral_stiffness"].from_table(table, _protocol(plan), tire)
-        out[i] = _resumed(Path(root) / results.case_name(0, c), "lateral_stiffness", exp, plan, [c], 1, None,
-                          tire=tire)[0]
+        return lambda d: _resumed(Path(root) / results.case_name(0, c), "lateral_stiffness", exp, plan, [c], 1, None,
+                                  tire=tire, device=d)[0]
+
+    n_done = [0]
+
+    def done(k, res):
+        i, c, _ = todo[k]
+        out[i] = res
+        n_done[0] += 1
         if on_case is not None:
-            on_case(results.case_name(0, c), n + 1, len(todo))
+            on_case(results.case_name(0, c), n_done[0], len(todo))
+
+    side_by_side([job(c, f) for _, c, f in todo], done)  # one folder per condition: side by side over the devices
     return out
 
 
@@ -269,7 +281,7 @@ def _protocol(plan):
     return Protocol.from_dict(plan.solver)
 
 
-def _resumed(folder, key, exp, plan, conds, batch_size, on_case, tire=None) -> list:
+def _resumed(folder, key, exp, plan, conds, batch_size, on_case, tire=None, device=None) -> list:
     """Run exp on `tire` (default plan.tire) at every condition not yet saved in folder/cases (claimed
     with these settings), then read every condition back: its ExperimentResult or its error message (str)."""
     from . import batch
@@ -298,7 +310,7 @@ def _resumed(folder, key, exp, plan, conds, batch_size, on_case, tire=None) -> l
             on_case(names[todo[k]], done[0], len(conds))
 
     if todo:
-        batch.run(exp, make_tire(tire), [conds[i] for i in todo], batch=batch_size, on_result=save)
+        batch.run(exp, make_tire(tire), [conds[i] for i in todo], batch=batch_size, on_result=save, device=device)
     return [_read_case(cases / n) for n in names]
 
 

@@ -222,7 +222,7 @@ def test_quasi_static_crossing_and_its_tandem_cam(e03):
     from jtire import enveloping
 
     cam = [q[k] for k in ("ellips_shift_m", "ellips_length_m", "ellips_height_m", "ellips_order")]
-    we, _ = (np.asarray(v) for v in enveloping._effective_many(s, *cam, float(r.info["cleat_radius_m"]), h))
+    we, _ = (np.asarray(v) for v in enveloping.effective_many(s, *cam, float(r.info["cleat_radius_m"]), h))
     assert np.sqrt(np.mean((we - w) ** 2)) == pytest.approx(q["enveloping_fit_rms_height_m"], rel=1e-9)
 
 

@@ -63,16 +63,31 @@ def test_tandem_is_the_mean_and_the_difference_of_its_cams():
     assert E.reach(l_s, a_e, R, H) == pytest.approx(HALF + l_s / 2 + a_e)
 
 
+def test_the_host_tandem_is_the_traced_one():
+    """`effective_many` (numpy, what the fit calls on the host) and `effective` traced by JAX (what the
+    ring's road input calls) are one formula: equal to round-off at every position, across and past
+    the cleat."""
+    import jax
+
+    cam = (0.2, 0.3, 0.25, 1.7)
+    s = np.linspace(-0.6, 0.6, 61)
+    w_np, sl_np = E.effective_many(s, *cam, R, H)
+    w_jx, sl_jx = jax.vmap(lambda x: E.effective(x, *cam, R, H))(s)
+    np.testing.assert_allclose(w_np, np.asarray(w_jx), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(sl_np, np.asarray(sl_jx), rtol=1e-12, atol=1e-13)
+    assert np.max(w_np) > 0.5 * H and w_np[0] == 0.0  # the bump is there, and ends
+
+
 def test_fit_reproduces_a_known_tandem():
     """Data made by a known tandem: the fit reproduces its effective height to 1 % of the bump and its
     slope to 0.01 (the parameters themselves trade off on one cleat; the curve is what is identified)."""
     truth = (0.18, 0.35, 0.3, 2.2)
     s = np.linspace(-0.44, 0.44, 45)
-    w, slope = (np.asarray(v) for v in E._effective_many(s, *truth, R, H))
+    w, slope = (np.asarray(v) for v in E.effective_many(s, *truth, R, H))
     f = E.fit(s, w, slope, R, H, a=0.1, R0=0.55)
     assert f.rms_height_m < 0.01 * np.max(w) and f.rms_slope < 0.01
     assert f.max_height_m == pytest.approx(np.max(w))
-    we, se = (np.asarray(v) for v in E._effective_many(s, f.l_s, f.a_e, f.b_e, f.c_e, R, H))
+    we, se = (np.asarray(v) for v in E.effective_many(s, f.l_s, f.a_e, f.b_e, f.c_e, R, H))
     assert np.max(np.abs(we - w)) < 0.02 * np.max(w)
 
 

@@ -51,3 +51,27 @@ def test_the_contact_adds_compliance_to_the_sidewall_springs(e14, e13_runs, side
     sidewall = 1.0 / k_bx + r_l**2 / k_bt
     assert 1.0 / c_x > sidewall
     assert (1.0 / c_x - sidewall) * c_x > 0.10
+
+
+def test_every_experiment_declares_its_method(protocol, spec):
+    """Whether a run is vmapped and given an explicit step follows from `method`; an experiment without
+    one (E14 before) was taken for a transient. Each is built from its default table; a composite (E11)
+    runs its components and has none of its own."""
+    from jtire.experiments import REGISTRY
+    from jtire.experiments.base import METHODS
+
+    for name, cls in REGISTRY.items():
+        exp = make_experiment(name, protocol, spec)
+        if hasattr(exp, "components"):
+            continue
+        assert exp.method in METHODS, name
+        assert exp.shardable <= exp.time_stepped, name  # a shardable run is time-stepped
+
+
+def test_an_experiment_without_a_method_is_refused():
+    from jtire.experiments.base import _method
+
+    class NoMethod:
+        pass
+    with pytest.raises(TypeError, match="NoMethod: method None"):
+        _method(NoMethod())

@@ -59,3 +59,42 @@ def test_static_cases_side_by_side_equal_one_device(coarse_tire, protocol, spec)
                 assert a.quantities[k] == pytest.approx(v, rel=1e-12, abs=1e-15), k
     k_sv = [r.quantities["k_sv_N_per_m"] for r in side]
     assert np.all(np.isfinite(k_sv)) and len(set(k_sv)) == 3  # three loads, three secants
+
+
+@pytest.mark.skipif(len(jax.devices()) < 2, reason="needs two JAX devices (one per core: 2 cores)")
+def test_side_by_side_runs_one_job_per_device_in_order():
+    """`batch.side_by_side` (the default runner's scheduler): never two jobs on one device at once,
+    both devices used, every job run once and its result handed on in the calling thread, and a job's
+    error raised there with the jobs not yet started left unrun."""
+    import threading
+    import time
+
+    from jtire import batch
+
+    lock, busy, started, seen = threading.Lock(), set(), [], []
+
+    def job(k):
+        def run(d):
+            with lock:
+                assert d not in busy  # one job per device at a time
+                busy.add(d)
+                started.append((k, d))
+            time.sleep(0.02 * (1 + k % 3))
+            with lock:
+                busy.discard(d)
+            return k * k
+        return run
+
+    caller = threading.current_thread()
+    batch.side_by_side([job(k) for k in range(7)],
+                       lambda k, v: seen.append((k, v, threading.current_thread() is caller)))
+    assert sorted(k for k, _ in started) == list(range(7)) and {d for _, d in started} == {0, 1}
+    assert sorted(seen) == [(k, k * k, True) for k in range(7)]
+
+    def bad(d):
+        raise RuntimeError("case 2 went unstable")
+    ran = []
+    with pytest.raises(RuntimeError, match="case 2 went unstable"):
+        batch.side_by_side([lambda d: time.sleep(0.05), bad] + [lambda d, k=k: ran.append(k) or time.sleep(0.2)
+                                                                 for k in range(6)], lambda k, v: None)
+    assert len(ran) < 6  # the jobs after the error were cancelled, not all run

@@ -26,6 +26,19 @@ import numpy as np
 from .phases import Case, Protocol
 
 
+METHODS = ("static", "steady", "transient")
+
+
+def _method(exp) -> str:
+    """exp's `method` field: every experiment declares one. None is assumed: a static experiment
+    taken for a transient was vmapped and given an explicit step it never used (E14 did)."""
+    m = getattr(exp, "method", None)
+    if m not in METHODS:
+        raise TypeError(f"{type(exp).__name__}: method {m!r}: an experiment declares a `method` field, one of "
+                        f"{', '.join(METHODS)}")
+    return m
+
+
 class Experiment(eqx.Module):
     """Base class of every virtual experiment (the module docstring describes the interface).
 
@@ -57,12 +70,12 @@ class Experiment(eqx.Module):
         them case by case, unbatched, on one device (a vmapped Newton loop runs both branches of its
         conditionals). A transient started from a static state (method "static" with a release) holds
         a Newton solve too."""
-        return self.time_stepped and getattr(self, "method", "transient") not in ("static", "steady")
+        return self.time_stepped and _method(self) not in ("static", "steady")
 
     @property
     def time_stepped(self) -> bool:
         """Whether the experiment integrates in time (needs the explicit step of each case)."""
-        return getattr(self, "method", "transient") not in ("static", "steady")
+        return _method(self) not in ("static", "steady")
 
     @classmethod
     @abc.abstractmethod
