@@ -255,14 +255,15 @@ def storage_pushes(root, plan, conds, freqs, on_case=None) -> list:
         return lambda d: _resumed(Path(root) / results.case_name(0, c), "lateral_stiffness", exp, plan, [c], 1, None,
                                   tire=tire, device=d)[0]
 
-    n_done = [0]
+    n_done = 0
 
     def done(k, res):
+        nonlocal n_done
         i, c, _ = todo[k]
         out[i] = res
-        n_done[0] += 1
+        n_done += 1
         if on_case is not None:
-            on_case(results.case_name(0, c), n_done[0], len(todo))
+            on_case(results.case_name(0, c), n_done, len(todo))
 
     side_by_side([job(c, f) for _, c, f in todo], done)  # one folder per condition: side by side over the devices
     return out

@@ -30,8 +30,8 @@ METHODS = ("static", "steady", "transient")
 
 
 def _method(exp) -> str:
-    """exp's `method` field: every experiment declares one. None is assumed: a static experiment
-    taken for a transient was vmapped and given an explicit step it never used (E14 did)."""
+    """exp's `method` field: every experiment declares one, and no default is assumed (a static
+    experiment taken for a transient was vmapped and given an explicit step it never used: E14 was)."""
     m = getattr(exp, "method", None)
     if m not in METHODS:
         raise TypeError(f"{type(exp).__name__}: method {m!r}: an experiment declares a `method` field, one of "
